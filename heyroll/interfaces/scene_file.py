@@ -1,0 +1,165 @@
+"""Scene files in TOML (read with the standard library's tomllib).
+
+Numbers are parsed as decimals (``parse_float=Decimal``) so that a scene's
+values reach every precision from their decimal text, not through a double.
+Unknown keys are errors: a typo must never be silently ignored.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from decimal import Decimal
+from importlib import resources
+from pathlib import Path
+
+from ..errors import SceneError, SceneFileError
+from ..model._numbers import is_finite, is_number, to_mpf, workprec
+from ..model.bodies import Body, parse_shape
+from ..model.laws import make_law
+from ..model.scene import STANDARD_GRAVITY, RunSettings, Scene
+from ..model.tracks import CircleTrack
+
+TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run"}
+TRACK_KEYS = {"type", "radius"}
+TRACK_TYPES = ("circle",)
+BODY_KEYS = {"shape", "kappa", "radius", "mass", "density", "phi", "dphi", "omega"}
+COLLISION_KEYS = {"law", "restitution"}
+RUN_KEYS = {"t_end", "max_collisions"}
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and check a scene file; raises SceneError (a ValueError) on bad input."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneFileError(str(path), "no such scene file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneFileError(str(path), f"cannot be read ({exc.__class__.__name__})") from None
+    return parse_scene(text, source=str(path), default_name=path.stem)
+
+
+def default_scene() -> Scene:
+    """The built-in default scene: two solid balls of different radii in a circle."""
+    text = resources.files("heyroll").joinpath("scenes/default.toml").read_text(encoding="utf-8")
+    return parse_scene(text, source="<default scene>")
+
+
+def default_scene_text() -> str:
+    return resources.files("heyroll").joinpath("scenes/default.toml").read_text(encoding="utf-8")
+
+
+def parse_scene(text: str, *, source: str = "<scene>", default_name: str = "scene") -> Scene:
+    try:
+        data = tomllib.loads(text, parse_float=Decimal)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneFileError(source, f"not valid TOML ({exc})") from None
+    return scene_from_dict(data, default_name=default_name)
+
+
+def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
+    _no_unknown(data, TOP_KEYS, "")
+    name = data.get("name", default_name)
+    if not isinstance(name, str):
+        raise SceneError("name", "must be a string")
+    g = _number(data, "g", "", default=STANDARD_GRAVITY)
+    track = _track(_table(data, "track", required=True))
+    bodies_data = data.get("bodies")
+    if bodies_data is None:
+        raise SceneError("bodies", "missing: give at least one [[bodies]] table")
+    if not isinstance(bodies_data, list) or not all(isinstance(b, dict) for b in bodies_data):
+        raise SceneError("bodies", "must be an array of tables ([[bodies]])")
+    if not bodies_data:
+        raise SceneError("bodies", "at least one body is required")
+    bodies, phis, dphis = [], [], []
+    for n, entry in enumerate(bodies_data, start=1):
+        body, phi, dphi = _body(entry, f"bodies[{n}]", track)
+        bodies.append(body)
+        phis.append(phi)
+        dphis.append(dphi)
+    collision = _table(data, "collision", required=False)
+    _no_unknown(collision, COLLISION_KEYS, "collision")
+    law_name = collision.get("law", "hedrih")
+    if not isinstance(law_name, str):
+        raise SceneError("collision.law", "must be a string")
+    law = make_law(law_name, _number(collision, "restitution", "collision", default="1"))
+    run = _table(data, "run", required=False)
+    _no_unknown(run, RUN_KEYS, "run")
+    max_collisions = run.get("max_collisions")
+    settings = RunSettings.make(_number(run, "t_end", "run", default="100"), max_collisions)
+    return Scene.make(track=track, bodies=bodies, phi=phis, dphi=dphis, law=law, g=g, run=settings, name=name)
+
+
+def _track(table: dict) -> CircleTrack:
+    _no_unknown(table, TRACK_KEYS, "track")
+    kind = table.get("type")
+    if kind is None:
+        raise SceneError("track.type", f"missing: expected one of {' | '.join(TRACK_TYPES)}")
+    if kind not in TRACK_TYPES:
+        raise SceneError("track.type", f"unknown track type {kind!r}; expected one of {' | '.join(TRACK_TYPES)}")
+    return CircleTrack.of_radius(_number(table, "radius", "track", required=True))
+
+
+def _body(entry: dict, field: str, track: CircleTrack):
+    _no_unknown(entry, BODY_KEYS, field)
+    radius = _number(entry, "radius", field, required=("shape" not in entry or entry.get("shape") != "particle"), default="0")
+    mass = _number(entry, "mass", field)
+    density = _number(entry, "density", field)
+    if "shape" in entry and "kappa" in entry:
+        raise SceneError(f"{field}.kappa", "give shape or kappa, not both")
+    if "kappa" in entry:
+        body = Body.with_kappa(_number(entry, "kappa", field), radius, mass=mass, field=field)
+        if density is not None:
+            raise SceneError(f"{field}.density", "a body given by kappa has no shape to fill: give mass")
+    else:
+        shape = entry.get("shape")
+        if shape is None:
+            raise SceneError(f"{field}.shape", "missing: give shape (solid_sphere | hollow_sphere | disk | ring | particle) or kappa")
+        if not isinstance(shape, str):
+            raise SceneError(f"{field}.shape", "must be a string")
+        body = Body.of_shape(parse_shape(shape, f"{field}.shape"), radius, mass=mass, density=density, field=field)
+    track.check_body(body, field)
+    phi = _number(entry, "phi", field, required=True)
+    if "dphi" in entry and "omega" in entry:
+        raise SceneError(f"{field}.omega", "give dphi or omega, not both")
+    if "omega" in entry:
+        if body.is_particle:
+            raise SceneError(f"{field}.omega", "a particle does not roll: give dphi")
+        omega = _number(entry, "omega", field)
+        with workprec():
+            dphi = to_mpf(omega) / track.rolling_ratio(body)  # omega_P = (R - r)/r dphi (eq. 23)
+    else:
+        dphi = _number(entry, "dphi", field, required=True)
+    return body, phi, dphi
+
+
+def _table(data: dict, key: str, *, required: bool) -> dict:
+    value = data.get(key)
+    if value is None:
+        if required:
+            raise SceneError(key, f"missing: add a [{key}] table")
+        return {}
+    if not isinstance(value, dict):
+        raise SceneError(key, f"must be a table ([{key}])")
+    return value
+
+
+def _number(table: dict, key: str, prefix: str, *, required: bool = False, default=None):
+    field = f"{prefix}.{key}" if prefix else key
+    if key not in table:
+        if required:
+            raise SceneError(field, "missing: a number is required")
+        return default
+    value = table[key]
+    if not is_number(value):
+        raise SceneError(field, f"must be a number, got {value!r}")
+    if not is_finite(value):
+        raise SceneError(field, f"must be a finite number, got {value}")
+    return value
+
+
+def _no_unknown(table: dict, allowed: set, prefix: str) -> None:
+    for key in table:
+        if key not in allowed:
+            where = f"{prefix}.{key}" if prefix else key
+            raise SceneError(where, f"unknown key; allowed here: {', '.join(sorted(allowed))}")

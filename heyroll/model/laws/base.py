@@ -1,0 +1,135 @@
+"""The collision-law strategy interface.
+
+Every law here is of Newton type in some generalized velocity u_i = c_i phi_i'
+with some inertia M_i: the sum M_i u_i is conserved and the difference of u is
+reversed and scaled by the restitution k (paper eqs. 1-2 and 8-9). Such a law
+is linear in the pre-collision velocities, so it compiles to an impulse map
+(three constants) that the engine applies in the collision callback.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, Protocol, runtime_checkable
+
+import mpmath
+
+from .._numbers import workprec
+from ..bodies import Body
+from ..tracks import CircleTrack
+
+
+@dataclass(frozen=True)
+class ImpulseMap:
+    """The law for one pair, written on the angular rates phi' of the track.
+
+    With D = phi_i' - q phi_j' (q = c_j / c_i):
+        phi_i'+ = phi_i' - a_i D,    phi_j'+ = phi_j' + a_j D.
+    Constants are mpmath numbers at model precision; round them once to the
+    run's type.
+    """
+
+    q: mpmath.mpf
+    a_i: mpmath.mpf
+    a_j: mpmath.mpf
+
+
+@dataclass(frozen=True)
+class LawVariables:
+    """Generalized velocity scale c (u = c phi') and inertia M of one body."""
+
+    scale: mpmath.mpf
+    inertia: mpmath.mpf
+
+
+@runtime_checkable
+class CollisionLaw(Protocol):
+    """A collision law: pre-collision rates of two touching bodies -> outgoing rates."""
+
+    name: ClassVar[str]
+    #: Where the law comes from (paper and equation numbers).
+    source: ClassVar[str]
+    restitution: mpmath.mpf
+
+    def variables(self, track: CircleTrack, body: Body) -> LawVariables:
+        """The law's velocity scale and inertia for ``body`` on ``track``."""
+        ...
+
+
+def check_restitution(k) -> mpmath.mpf:
+    from ...errors import SceneError
+    from .._numbers import is_finite, to_mpf
+
+    if not is_finite(k):
+        raise SceneError("collision.restitution", f"must be a finite number, got {k!r}")
+    x = to_mpf(k)
+    if not (0 <= x <= 1):
+        raise SceneError("collision.restitution", f"must be in [0, 1], got {k}")
+    return x
+
+
+def impulse_map(law: CollisionLaw, track: CircleTrack, body_i: Body, body_j: Body) -> ImpulseMap:
+    """Compile ``law`` for the pair (i, j) into an :class:`ImpulseMap` (eqs. 10-11)."""
+    vi, vj = law.variables(track, body_i), law.variables(track, body_j)
+    with workprec():
+        k = law.restitution
+        total = vi.inertia + vj.inertia
+        return ImpulseMap(
+            q=vj.scale / vi.scale,
+            a_i=(1 + k) * vj.inertia / total,
+            a_j=(1 + k) * vi.inertia * vi.scale / (total * vj.scale),
+        )
+
+
+def law_velocities(law: CollisionLaw, track: CircleTrack, body: Body, dphi):
+    """u = c phi' for ``body`` (omega_P for the rolling law, v_C for Newton's)."""
+    return law.variables(track, body).scale * dphi
+
+
+def outgoing(law: CollisionLaw, track: CircleTrack, body_i: Body, body_j: Body, u_i, u_j):
+    """Outgoing law velocities (u_i+, u_j+) from incoming ones, eqs. (10)-(11).
+
+    Written as in the paper, in the law's own variables, for tables and tests;
+    the engine uses the equivalent :func:`impulse_map`.
+    """
+    vi, vj = law.variables(track, body_i), law.variables(track, body_j)
+    k = law.restitution
+    ratio_ij = vi.inertia / vj.inertia
+    ratio_ji = vj.inertia / vi.inertia
+    du = u_i - u_j
+    return u_i - (1 + k) / (1 + ratio_ij) * du, u_j + (1 + k) / (1 + ratio_ji) * du
+
+
+def collision_impulse(inertia_i, inertia_j, k, du):
+    """Impulse on body i in the law's variables, M_i (u_i+ - u_i) (eqs. 5, 12).
+
+    For the rolling law: the moment of the collision impulse about the rolling
+    axis, J_P1 (omega_P1+ - omega_P1) = -J1 J2/(J1 + J2) (1 + k)(w1 - w2), with
+    du = w1 - w2. Works on floats, arrays and mpmath numbers.
+    """
+    reduced = inertia_i * inertia_j / (inertia_i + inertia_j)
+    return -reduced * (1 + k) * du
+
+
+def kinetic_energy_change(inertia_i, inertia_j, k, du):
+    """Change of the law's kinetic energy sum 1/2 M u^2 (eq. 15; 16-17 at k = 0, 1)."""
+    reduced = inertia_i * inertia_j / (inertia_i + inertia_j)
+    return -reduced / 2 * (1 - k * k) * du * du
+
+
+def conserves_mechanical_energy_bound(law: CollisionLaw, track: CircleTrack, body_i: Body, body_j: Body) -> bool:
+    """True when this law can never raise the pair's mechanical energy.
+
+    The law dissipates its own kinetic energy 1/2 M u^2 = 1/2 M c^2 phi'^2
+    (eq. 15). That is proportional to the true kinetic energy 1/2 kappa m
+    rho^2 phi'^2 with one factor for both bodies only if M c^2 / (kappa m
+    rho^2) agrees for i and j; otherwise (e.g. Newton's law on centre speeds
+    for a disk hitting a ring) an elastic collision can create energy.
+    """
+    def ratio(body):
+        v = law.variables(track, body)
+        return v.inertia * v.scale**2 / track.generalized_mass(body)
+
+    with workprec():
+        ri, rj = ratio(body_i), ratio(body_j)
+        return abs(ri - rj) <= mpmath.mpf(2) ** (-200) * abs(ri)

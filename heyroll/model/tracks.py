@@ -1,0 +1,106 @@
+"""The circular track of paper section 4: bodies rolling inside a circle.
+
+Angles phi are measured at the circle's centre C0 from its lowest point,
+counter-clockwise positive. A body of radius r keeps its centre on the circle
+of radius rho = R - r (a particle, r = 0, slides on the track itself).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mpmath
+
+from ..errors import SceneError
+from ._numbers import Real, is_finite, to_mpf, workprec
+from .bodies import Body
+
+
+@dataclass(frozen=True)
+class CircleTrack:
+    """A circle of radius R in a vertical plane; bodies roll on its inside."""
+
+    radius: mpmath.mpf
+
+    @classmethod
+    def of_radius(cls, radius: Real, field: str = "track.radius") -> "CircleTrack":
+        if not is_finite(radius):
+            raise SceneError(field, f"must be a finite number, got {radius!r}")
+        R = to_mpf(radius)
+        if R <= 0:
+            raise SceneError(field, f"must be > 0, got {radius}")
+        return cls(radius=R)
+
+    def check_body(self, body: Body, field: str) -> None:
+        if body.radius >= self.radius:
+            raise SceneError(
+                f"{field}.radius",
+                f"must be < track.radius (r < R), got r = {mpmath.nstr(body.radius, 17)} "
+                f">= R = {mpmath.nstr(self.radius, 17)}",
+            )
+
+    def path_radius(self, body: Body) -> mpmath.mpf:
+        """rho = R - r, radius of the circle traced by the body's centre."""
+        with workprec():
+            return self.radius - body.radius
+
+    def rolling_ratio(self, body: Body) -> mpmath.mpf:
+        """(R - r)/r: omega_P = (R - r)/r * dphi/dt (paper eq. 23)."""
+        if body.is_particle:
+            raise ValueError("a particle does not roll: omega_P is undefined for r = 0")
+        with workprec():
+            return (self.radius - body.radius) / body.radius
+
+    def angular_stiffness(self, body: Body, g: mpmath.mpf) -> mpmath.mpf:
+        """g / (kappa (R - r)): phi'' + g/(kappa (R - r)) sin phi = 0 (eq. 25)."""
+        with workprec():
+            return g / (body.kappa * (self.radius - body.radius))
+
+    def generalized_mass(self, body: Body) -> mpmath.mpf:
+        """kappa m (R - r)^2: kinetic energy = 1/2 kappa m rho^2 phi'^2 (eq. 21)."""
+        with workprec():
+            return body.kappa * body.mass * (self.radius - body.radius) ** 2
+
+    def weight_moment(self, body: Body, g: mpmath.mpf) -> mpmath.mpf:
+        """m g (R - r): potential energy = m g rho (1 - cos phi) (eq. 21)."""
+        with workprec():
+            return body.mass * g * (self.radius - body.radius)
+
+    def contact_angle(self, body_i: Body, body_j: Body) -> mpmath.mpf:
+        """beta, the central angle between the centres of two touching bodies (eq. 44).
+
+        Law of cosines on the triangle C0 C_i C_j with sides R - r_i, R - r_j,
+        r_i + r_j. Raises ValueError when the bodies cannot touch side by side.
+        """
+        with workprec():
+            rho_i = self.radius - body_i.radius
+            rho_j = self.radius - body_j.radius
+            d = body_i.radius + body_j.radius
+            cos_beta = (rho_i**2 + rho_j**2 - d**2) / (2 * rho_i * rho_j)
+            if cos_beta <= -1:
+                raise ValueError("bodies too large to touch side by side: r_i + r_j must be < R")
+            return mpmath.acos(cos_beta)
+
+    def contact_potential_minimum(self, body_i: Body, body_j: Body, g: mpmath.mpf) -> mpmath.mpf:
+        """Least potential energy of the pair over all configurations where they touch.
+
+        U = B (1 - cos x) + C (1 - cos(x + beta)) with B, C the weight moments;
+        its minimum over x is B + C - |B + C e^{i beta}|. A pair whose total
+        energy stays below it can never collide.
+        """
+        with workprec():
+            B = self.weight_moment(body_i, g)
+            C = self.weight_moment(body_j, g)
+            beta = self.contact_angle(body_i, body_j)
+            return B + C - mpmath.sqrt(B**2 + C**2 + 2 * B * C * mpmath.cos(beta))
+
+
+def mechanical_energy(generalized_mass, weight_moment, phi, dphi, sin):
+    """E = 1/2 kappa m rho^2 phi'^2 + m g rho (1 - cos phi) (paper eq. 26).
+
+    Works on floats, numpy arrays or mpmath numbers: pass the matching ``sin``.
+    1 - cos phi is written 2 sin^2(phi/2), which keeps full relative accuracy
+    near the lowest point.
+    """
+    half = sin(phi / 2)
+    return generalized_mass * dphi * dphi / 2 + 2 * weight_moment * half * half

@@ -1,0 +1,87 @@
+"""Working precision of a run: double, quad (real128) or MPFR (mp:BITS).
+
+Model constants are mpmath numbers at 256 bits; a precision rounds each of
+them once, through its decimal text at more digits than the target carries.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import heyoka as hy
+import mpmath
+
+from ..errors import SceneError
+
+
+@dataclass(frozen=True)
+class Precision:
+    """A floating-point type for heyoka: ``double``, ``quad`` or ``mp:BITS``."""
+
+    name: str
+    bits: int
+
+    @classmethod
+    def parse(cls, text: str, field: str = "precision") -> "Precision":
+        text = str(text).strip().lower()
+        if text in ("double", "float64", "dbl"):
+            return cls("double", 53)
+        if text in ("quad", "real128", "f128"):
+            if not hasattr(hy, "real128"):
+                raise SceneError(field, "quad precision needs a heyoka build with real128")
+            return cls("quad", 113)
+        if text.startswith("mp:"):
+            try:
+                bits = int(text[3:])
+            except ValueError:
+                raise SceneError(field, f"mp:BITS needs a whole number of bits, got {text!r}") from None
+            if not 64 <= bits <= 4096:
+                raise SceneError(field, f"mp:BITS must be between 64 and 4096, got {bits}")
+            if not hasattr(hy, "real"):
+                raise SceneError(field, "MPFR precision needs a heyoka build with real")
+            return cls(f"mp:{bits}", bits)
+        raise SceneError(field, f"unknown precision {text!r}; expected double | quad | mp:BITS")
+
+    @property
+    def fp_type(self):
+        if self.name == "double":
+            return float
+        if self.name == "quad":
+            return hy.real128
+        return hy.real
+
+    @property
+    def epsilon(self) -> float:
+        return math.ldexp(1.0, 1 - self.bits)
+
+    @property
+    def digits(self) -> int:
+        """Significant decimal digits that round-trip a number of this type."""
+        return 17 if self.bits == 53 else math.ceil(self.bits * math.log10(2)) + 2
+
+    def number(self, value):
+        """Round an mpmath (or Python) number once to this precision."""
+        if self.name == "double":
+            return float(value)
+        text = mpmath.nstr(mpmath.mpf(value), self.digits + 10, strip_zeros=False, min_fixed=1, max_fixed=0)
+        if self.name == "quad":
+            return hy.real128(text)
+        return hy.real(text, self.bits)
+
+    def integrator_options(self) -> dict:
+        return {} if self.name == "double" else {"fp_type": self.fp_type}
+
+    def format(self, value) -> str:
+        """Text that reads back to the same number at this precision."""
+        if self.name == "double":
+            return f"{float(value):.17g}"
+        return mpmath.nstr(_to_mpf(value, self.bits), self.digits, strip_zeros=False)
+
+
+DOUBLE = Precision("double", 53)
+
+
+def _to_mpf(value, bits):
+    with mpmath.workprec(bits + 16):
+        return mpmath.mpf(str(value))

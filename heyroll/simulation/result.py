@@ -1,0 +1,183 @@
+"""The result of a run: status, message, collision records and tables."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from ..model.laws import collision_impulse, kinetic_energy_change
+from ..model.scene import ContactPair, Scene
+from ..model.tracks import mechanical_energy
+from .precision import Precision
+
+
+class Status(str, Enum):
+    """How a run ended. ``completed`` and ``max_collisions`` are successes."""
+
+    COMPLETED = "completed"
+    MAX_COLLISIONS = "max_collisions"
+    CONTACT = "contact"
+    OVERLAP = "overlap"
+    FAILED = "failed"
+
+    @property
+    def success(self) -> bool:
+        return self in (Status.COMPLETED, Status.MAX_COLLISIONS)
+
+
+#: Columns of the collision table, in order (see README, "Outputs").
+TABLE_COLUMNS = (
+    "n", "t", "i", "j", "phi_i", "phi_j",
+    "omega_i_before", "omega_j_before", "omega_i_after", "omega_j_after",
+    "energy_before", "energy_after",
+    "dphi_i_before", "dphi_j_before", "dphi_i_after", "dphi_j_after",
+    "law_impulse", "law_energy_change",
+)
+INTEGER_COLUMNS = ("n", "i", "j")
+
+
+@dataclass(frozen=True)
+class BodyConstants:
+    """Per-body numbers in the run's type for vectorized post-processing."""
+
+    generalized_mass: np.ndarray
+    weight_moment: np.ndarray
+    rolling_ratio: np.ndarray  # (R - r)/r, NaN for particles
+
+
+def body_constants(scene: Scene) -> BodyConstants:
+    tr, g = scene.track, scene.g
+    return BodyConstants(
+        generalized_mass=np.array([float(tr.generalized_mass(b)) for b in scene.bodies]),
+        weight_moment=np.array([float(tr.weight_moment(b, g)) for b in scene.bodies]),
+        rolling_ratio=np.array([np.nan if b.is_particle else float(tr.rolling_ratio(b)) for b in scene.bodies]),
+    )
+
+
+def body_energies(constants: BodyConstants, states: np.ndarray) -> np.ndarray:
+    """Mechanical energy of every body (columns) for each state row (eq. 26)."""
+    states = np.atleast_2d(np.asarray(states, dtype=float))
+    n = constants.generalized_mass.size
+    return mechanical_energy(constants.generalized_mass, constants.weight_moment, states[:, :n], states[:, n:], np.sin)
+
+
+@dataclass(frozen=True)
+class SimulationResult:
+    """What :func:`heyroll.simulate` returns.
+
+    ``states_before[n]`` / ``states_after[n]`` hold the full state
+    [phi_1..phi_N, dphi_1..dphi_N] just before / after collision n (0-based);
+    ``pair_numbers[n]`` indexes ``pairs``. Use :meth:`collision_table` for the
+    table with bodies numbered from 1.
+    """
+
+    scene: Scene
+    status: Status
+    message: str
+    precision: Precision
+    t_final: float
+    initial_state: np.ndarray
+    final_state: np.ndarray
+    times: np.ndarray
+    pair_numbers: np.ndarray
+    pairs: tuple[ContactPair, ...]
+    states_before: np.ndarray
+    states_after: np.ndarray
+    wall_time_s: float
+    steps: int = 0
+    settings: dict = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return self.status.success
+
+    @property
+    def n_collisions(self) -> int:
+        return int(self.times.size)
+
+    @property
+    def n_bodies(self) -> int:
+        return len(self.scene.bodies)
+
+    def constants(self) -> BodyConstants:
+        return body_constants(self.scene)
+
+    def energy(self, state) -> float:
+        return float(body_energies(self.constants(), state).sum())
+
+    @property
+    def energy_initial(self) -> float:
+        return self.energy(self.initial_state)
+
+    @property
+    def energy_final(self) -> float:
+        return self.energy(self.final_state)
+
+    def collision_table(self) -> np.ndarray:
+        """One row per collision as a numpy structured array (columns TABLE_COLUMNS)."""
+        n = self.n_collisions
+        dtype = [(c, np.int64 if c in INTEGER_COLUMNS else np.float64) for c in TABLE_COLUMNS]
+        table = np.zeros(n, dtype=dtype)
+        if n == 0:
+            return table
+        nb = self.n_bodies
+        before = np.asarray(self.states_before, dtype=float)
+        after = np.asarray(self.states_after, dtype=float)
+        i = np.array([p.i for p in self.pairs], dtype=np.int64)[self.pair_numbers]
+        j = np.array([p.j for p in self.pairs], dtype=np.int64)[self.pair_numbers]
+        rows = np.arange(n)
+        c = self.constants()
+        table["n"] = rows + 1
+        table["t"] = np.asarray(self.times, dtype=float)
+        table["i"], table["j"] = i + 1, j + 1
+        table["phi_i"], table["phi_j"] = before[rows, i], before[rows, j]
+        for side, idx in (("i", i), ("j", j)):
+            table[f"dphi_{side}_before"] = before[rows, nb + idx]
+            table[f"dphi_{side}_after"] = after[rows, nb + idx]
+            table[f"omega_{side}_before"] = c.rolling_ratio[idx] * before[rows, nb + idx]
+            table[f"omega_{side}_after"] = c.rolling_ratio[idx] * after[rows, nb + idx]
+        table["energy_before"] = body_energies(c, before).sum(axis=1)
+        table["energy_after"] = body_energies(c, after).sum(axis=1)
+        impulse, change = self._law_quantities(i, j, before[rows, nb + i], before[rows, nb + j])
+        table["law_impulse"], table["law_energy_change"] = impulse, change
+        return table
+
+    def _law_quantities(self, i, j, dphi_i, dphi_j):
+        """Moment of the collision impulse (eq. 12) and kinetic-energy change (eq. 15)."""
+        law, tr, bodies = self.scene.law, self.scene.track, self.scene.bodies
+        k = float(law.restitution)
+        impulse = np.empty(i.size)
+        change = np.empty(i.size)
+        for pair in {(a, b) for a, b in zip(i.tolist(), j.tolist())}:
+            mask = (i == pair[0]) & (j == pair[1])
+            vi, vj = law.variables(tr, bodies[pair[0]]), law.variables(tr, bodies[pair[1]])
+            mi, mj = float(vi.inertia), float(vj.inertia)
+            du = float(vi.scale) * dphi_i[mask] - float(vj.scale) * dphi_j[mask]
+            impulse[mask] = collision_impulse(mi, mj, k, du)
+            change[mask] = kinetic_energy_change(mi, mj, k, du)
+        return impulse, change
+
+    def summary(self) -> dict:
+        """The run in a JSON-ready dictionary (see README, "Outputs")."""
+        nb = self.n_bodies
+        final = np.asarray(self.final_state, dtype=float)
+        return {
+            "status": self.status.value,
+            "message": self.message,
+            "collisions": self.n_collisions,
+            "t_final": float(self.t_final),
+            "energy_initial": self.energy_initial,
+            "energy_final": self.energy_final,
+            "final_state": [
+                {"body": k + 1, "phi": float(final[k]), "dphi": float(final[nb + k])} for k in range(nb)
+            ],
+            "wall_time_s": self.wall_time_s,
+            "steps": self.steps,
+            "precision": self.precision.name,
+            "law": self.scene.law.name,
+            "restitution": float(self.scene.law.restitution),
+            "watched_contacts": [[p.i + 1, p.j + 1] for p in self.pairs],
+            **self.settings,
+        }
