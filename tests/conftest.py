@@ -1,0 +1,26 @@
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "disk_and_ring.toml"
+
+
+@pytest.fixture
+def example_text() -> str:
+    return EXAMPLE.read_text(encoding="utf-8")
+
+
+def scene_text(bodies: str, *, track: str = 'type = "circle"\nradius = 1.0', extra: str = "") -> str:
+    """A scene file with the given [[bodies]] blocks."""
+    return f"g = 9.81\n{extra}\n[track]\n{track}\n{bodies}"
+
+
+def body(shape="solid_sphere", radius="0.1", mass="1.0", phi="0.0", dphi="0.0", extra="") -> str:
+    lines = ["[[bodies]]", f'shape = "{shape}"', f"radius = {radius}"]
+    if mass is not None:
+        lines.append(f"mass = {mass}")
+    lines += [f"phi = {phi}", f"dphi = {dphi}"]
+    if extra:
+        lines.append(extra)
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,125 @@
+"""Scene files: the documented format loads; every bad input is one clear error."""
+
+import mpmath
+import pytest
+
+import heyroll
+from heyroll import SceneError, SceneFileError, parse_scene
+
+from conftest import body, scene_text
+
+
+def test_example_scene_loads_as_written(example_text):
+    scene = parse_scene(example_text)
+    assert len(scene.bodies) == 2
+    assert scene.bodies[0].shape.value == "disk" and scene.bodies[1].shape.value == "ring"
+    assert scene.bodies[0].kappa == mpmath.mpf(3) / 2 and scene.bodies[1].kappa == 2
+    assert scene.law.name == "hedrih" and scene.law.restitution == 1
+    assert scene.run.max_collisions == 20 and scene.run.t_end == 100
+
+
+def test_decimal_text_is_kept_beyond_double():
+    # 0.12 reaches the model from its decimal text, not through the nearest double.
+    scene = parse_scene(scene_text(body(radius="0.12")))
+    assert scene.bodies[0].radius != mpmath.mpf(0.12)
+    with mpmath.workprec(300):
+        assert abs(scene.bodies[0].radius - mpmath.mpf("0.12")) < mpmath.mpf(2) ** -250
+
+
+def test_default_scene_is_two_different_balls():
+    scene = heyroll.default_scene()
+    assert [b.shape.value for b in scene.bodies] == ["solid_sphere", "solid_sphere"]
+    assert scene.bodies[0].radius != scene.bodies[1].radius
+
+
+def test_density_gives_mass_and_omega_gives_dphi():
+    text = scene_text(body(mass=None, extra="density = 1000.0").replace("dphi = 0.0", "omega = 9.0"))
+    scene = parse_scene(text)
+    with mpmath.workprec(256):
+        assert mpmath.almosteq(scene.bodies[0].mass, 1000 * 4 * mpmath.pi / 3 * mpmath.mpf("0.1") ** 3, 1e-70)
+        # omega_P = (R - r)/r dphi (eq. 23): 9 = 9 * dphi
+        assert mpmath.almosteq(scene.dphi[0], 1, 1e-70)
+
+
+def test_kappa_body():
+    text = scene_text("[[bodies]]\nkappa = 1.5\nradius = 0.1\nmass = 1.0\nphi = 0.0\ndphi = 0.0\n")
+    assert parse_scene(text).bodies[0].kappa == mpmath.mpf("1.5")
+
+
+def test_particle_needs_no_radius():
+    text = scene_text('[[bodies]]\nshape = "particle"\nmass = 1.0\nphi = 0.5\ndphi = 0.0\n')
+    assert parse_scene(text).bodies[0].is_particle
+
+
+TWO = body(phi="-0.5") + body(phi="0.5")
+
+BAD = {
+    "r >= R": (scene_text(body(radius="1.0")), "bodies[1].radius"),
+    "r > R": (scene_text(body(radius="1.5")), "bodies[1].radius"),
+    "r = 0": (scene_text(body(radius="0.0")), "bodies[1].radius"),
+    "r < 0": (scene_text(body(radius="-0.1")), "bodies[1].radius"),
+    "particle with radius": (scene_text(body(shape="particle", radius="0.1")), "bodies[1].radius"),
+    "mass = 0": (scene_text(body(mass="0.0")), "bodies[1].mass"),
+    "mass < 0": (scene_text(body(mass="-2")), "bodies[1].mass"),
+    "density < 0": (scene_text(body(mass=None, extra="density = -5.0")), "bodies[1].density"),
+    "density and mass": (scene_text(body(extra="density = 5.0")), "bodies[1].mass"),
+    "no mass": (scene_text(body(mass=None)), "bodies[1].mass"),
+    "k > 1": (scene_text(TWO, extra='[collision]\nlaw = "hedrih"\nrestitution = 1.5'), "collision.restitution"),
+    "k < 0": (scene_text(TWO, extra="[collision]\nrestitution = -0.1"), "collision.restitution"),
+    "nan phi": (scene_text(body(phi="nan")), "bodies[1].phi"),
+    "inf dphi": (scene_text(body(dphi="inf")), "bodies[1].dphi"),
+    "inf radius": (scene_text(body(radius="inf")), "bodies[1].radius"),
+    "nan g": (scene_text(body()).replace("g = 9.81", "g = nan"), "g"),
+    "nan restitution": (scene_text(TWO, extra="[collision]\nrestitution = nan"), "collision.restitution"),
+    "overlap at start": (scene_text(body(phi="0.0") + body(phi="0.1")), "bodies[2].phi"),
+    "wrong order": (scene_text(body(phi="0.5") + body(phi="-0.5")), "phi"),
+    "too big to pass": (scene_text(body(radius="0.6", phi="-1") + body(radius="0.5", phi="1")), "bodies[2].radius"),
+    "unknown shape": (scene_text(body(shape="cube")), "bodies[1].shape"),
+    "unknown law": (scene_text(TWO, extra='[collision]\nlaw = "maxwell"'), "collision.law"),
+    "unknown track": (scene_text(body(), track='type = "ellipse"\nradius = 1.0'), "track.type"),
+    "missing track": ("g = 9.81\n" + body(), "track"),
+    "missing track radius": (scene_text(body(), track='type = "circle"'), "track.radius"),
+    "missing track type": (scene_text(body(), track="radius = 1.0"), "track.type"),
+    "missing bodies": ('[track]\ntype = "circle"\nradius = 1.0\n', "bodies"),
+    "missing phi": (scene_text(body().replace("\nphi = 0.0\n", "\n")), "bodies[1].phi"),
+    "missing dphi": (scene_text(body().replace("dphi = 0.0\n", "")), "bodies[1].dphi"),
+    "missing shape": (scene_text(body().replace('shape = "solid_sphere"\n', "")), "bodies[1].shape"),
+    "typo in body": (scene_text(body(extra="radus = 0.1")), "bodies[1].radus"),
+    "typo at top": (scene_text(body(), extra="gravity = 9.8"), "gravity"),
+    "typo in run": (scene_text(body(), extra="[run]\nt_stop = 5.0"), "run.t_stop"),
+    "typo in collision": (scene_text(TWO, extra="[collision]\nrestitucion = 0.5"), "collision.restitucion"),
+    "typo in track": (scene_text(body(), track='type = "circle"\nradius = 1.0\nradiuss = 2.0'), "track.radiuss"),
+    "string number": (scene_text(body(mass='"heavy"')), "bodies[1].mass"),
+    "t_end <= 0": (scene_text(body(), extra="[run]\nt_end = 0.0"), "run.t_end"),
+    "max_collisions < 0": (scene_text(body(), extra="[run]\nmax_collisions = -3"), "run.max_collisions"),
+    "max_collisions float": (scene_text(body(), extra="[run]\nmax_collisions = 2.5"), "run.max_collisions"),
+    "kappa < 1": (scene_text("[[bodies]]\nkappa = 0.5\nradius = 0.1\nmass = 1.0\nphi = 0.0\ndphi = 0.0\n"), "bodies[1].kappa"),
+    "hedrih with particle": (
+        scene_text('[[bodies]]\nshape = "particle"\nmass = 1.0\nphi = -0.5\ndphi = 0.0\n'
+                   '[[bodies]]\nshape = "particle"\nmass = 1.0\nphi = 0.5\ndphi = 0.0\n'),
+        "collision.law",
+    ),
+    "not TOML": ("this is = = not toml [", "<scene>"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_input_names_field_and_rule(case):
+    text, field = BAD[case]
+    with pytest.raises(SceneError) as info:
+        parse_scene(text)
+    err = info.value
+    assert isinstance(err, ValueError)
+    message = str(err)
+    assert "\n" not in message
+    assert field in err.field, (case, message)
+    assert len(err.rule) > 10
+
+
+def test_not_toml_is_a_scene_file_error(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_bytes(b"\x00\x01 binary junk [[[")
+    with pytest.raises(SceneFileError):
+        heyroll.load_scene(path)
+    with pytest.raises(SceneFileError, match="no such scene file"):
+        heyroll.load_scene(tmp_path / "missing.toml")
