@@ -133,6 +133,8 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
         return Status.MAX_COLLISIONS, log.stop.message
     if log.stop.reason == "contact":
         return Status.CONTACT, log.stop.message
+    if log.stop.reason == "inconsistent":
+        return Status.INCONSISTENT, log.stop.message
     if outcome == hy.taylor_outcome.time_limit:
         return Status.COMPLETED, f"reached t_end = {float(t_end):.17g} s after {len(log.records)} collisions"
     return Status.FAILED, f"the integrator stopped with outcome {outcome!s}"

@@ -70,6 +70,7 @@ def _make_callback(system: SceneSystem, number: int, log: CollisionLog, holder: 
     append = records.append
     limit = log.max_collisions
     stop = log.stop
+    law_name = system.law_name
 
     def on_collision(ta, d_sgn):
         s = holder[0]
@@ -82,13 +83,21 @@ def _make_callback(system: SceneSystem, number: int, log: CollisionLog, holder: 
         s[vi_index] = vi_new
         s[vj_index] = vj_new
         # The gap opens at rate vj_new - vi_new; it closed at vi - vj.
-        if vj_new - vi_new <= tiny * abs(vi - vj):
-            stop.reason = "contact"
-            stop.message = (
-                f"collision {len(records)} at t = {float(ta.time):.17g}: bodies {pair.i + 1} and {pair.j + 1} "
-                f"do not separate after the law (gap rate {float(vj_new - vi_new):.3g} rad/s); "
-                "persistent contact is not modelled yet"
-            )
+        opening = vj_new - vi_new
+        if opening <= tiny * (vi - vj):
+            where = f"collision {len(records)} at t = {float(ta.time):.17g}: bodies {pair.i + 1} and {pair.j + 1}"
+            if opening < -tiny * (vi - vj):
+                stop.reason = "inconsistent"
+                stop.message = (
+                    f"{where} still approach after the '{law_name}' law (gap rate {float(vi - vj):.3g} -> "
+                    f"{float(-opening):.3g} rad/s closing): the law's outcome would make them overlap; stopped"
+                )
+            else:
+                stop.reason = "contact"
+                stop.message = (
+                    f"{where} do not separate after the law (gap rate {float(opening):.3g} rad/s): "
+                    "persistent contact is not modelled yet"
+                )
             return False
         if limit is not None and len(records) >= limit:
             stop.reason = "max_collisions"

@@ -19,6 +19,7 @@ class Status(str, Enum):
     COMPLETED = "completed"
     MAX_COLLISIONS = "max_collisions"
     CONTACT = "contact"
+    INCONSISTENT = "inconsistent_collision"
     OVERLAP = "overlap"
     FAILED = "failed"
 

@@ -28,6 +28,7 @@ class SceneSystem:
     gap_parameter_index: dict[int, int]
     n_bodies: int
     precision: Precision
+    law_name: str = ""
 
 
 def build_system(scene: Scene, precision: Precision, *, pairs: tuple[ContactPair, ...] | None = None) -> SceneSystem:
@@ -62,6 +63,7 @@ def build_system(scene: Scene, precision: Precision, *, pairs: tuple[ContactPair
         gap_parameter_index=gap_index,
         n_bodies=n,
         precision=precision,
+        law_name=scene.law.name,
     )
 
 

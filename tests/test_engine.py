@@ -1,0 +1,174 @@
+"""The heyoka engine on analytic properties of the problem."""
+
+import math
+
+import numpy as np
+import pytest
+
+import heyroll
+from heyroll import Status, parse_scene
+
+from conftest import body, scene_text
+
+EPS = np.finfo(float).eps
+
+
+def two_balls(k="1.0", law="hedrih", r1="0.10", r2="0.15", phi1="-1.2", phi2="0.5", dphi1="0.0", dphi2="0.0", t_end="60"):
+    return parse_scene(
+        scene_text(
+            body(radius=r1, mass=None, phi=phi1, dphi=dphi1, extra="density = 7850.0")
+            + body(radius=r2, mass=None, phi=phi2, dphi=dphi2, extra="density = 7850.0"),
+            extra=f'[collision]\nlaw = "{law}"\nrestitution = {k}\n[run]\nt_end = {t_end}',
+        )
+    )
+
+
+def gaps(scene, states):
+    """Gaps of all neighbour pairs (rows: states), in rad."""
+    states = np.atleast_2d(states)
+    out = []
+    for p in scene.pairs:
+        out.append(states[:, p.j] + float(p.offset) - states[:, p.i] - float(p.beta))
+    return np.array(out).T
+
+
+def test_single_body_has_no_events_and_keeps_its_energy():
+    scene = parse_scene(scene_text(body(phi="2.0", dphi="0.5"), extra="[run]\nt_end = 50.0"))
+    result = heyroll.simulate(scene)
+    assert result.pairs == ()
+    assert result.status is Status.COMPLETED and result.n_collisions == 0
+    assert float(result.t_final) == 50.0
+    assert abs(result.energy_final / result.energy_initial - 1) < 1e-14
+
+
+def test_elastic_collisions_keep_total_energy_and_the_law():
+    scene = two_balls()
+    result = heyroll.simulate(scene)
+    table = result.collision_table()
+    assert result.status is Status.COMPLETED and table.size > 40
+    e0 = result.energy_initial
+    assert np.max(np.abs(table["energy_after"] - table["energy_before"])) < 20 * EPS * e0
+    assert np.max(np.abs(table["energy_before"] - e0)) < 1e-13 * e0
+    # Law in the table's own columns: sum J_P omega_P kept, restitution on omega_P (eqs. 8-9).
+    J = np.array([float(b.rolling_inertia()) for b in scene.bodies])
+    before = J[0] * table["omega_i_before"] + J[1] * table["omega_j_before"]
+    after = J[0] * table["omega_i_after"] + J[1] * table["omega_j_after"]
+    assert np.allclose(before, after, rtol=1e-14, atol=1e-14 * np.abs(before).max())
+    rel_before = table["omega_i_before"] - table["omega_j_before"]
+    rel_after = table["omega_i_after"] - table["omega_j_after"]
+    assert np.allclose(rel_after, -rel_before, rtol=1e-13)
+
+
+def test_collisions_are_located_on_the_gap_root_and_never_overlap():
+    scene = two_balls()
+    result = heyroll.simulate(scene)
+    at_collision = gaps(scene, result.states_before)[:, 0]
+    assert np.max(np.abs(at_collision)) < 8 * EPS
+    # Approach before, separation after, at every collision.
+    table = result.collision_table()
+    assert np.all(table["dphi_i_before"] > table["dphi_j_before"])
+    assert np.all(table["dphi_i_after"] < table["dphi_j_after"])
+    from heyroll.simulation.trajectory import sample_branches
+
+    samples = np.concatenate([b.states for b in sample_branches(result, points=400)])
+    assert gaps(scene, samples).min() > -1e-12
+
+
+@pytest.mark.parametrize("k", ["0.3", "0.8"])
+def test_inelastic_energy_loss_is_eq_15(k):
+    result = heyroll.simulate(two_balls(k=k, r2="0.10"), max_collisions=15)
+    table = result.collision_table()
+    assert table.size == 15 and result.status is Status.MAX_COLLISIONS
+    loss = table["energy_after"] - table["energy_before"]
+    assert np.all(loss < 0)
+    assert np.allclose(loss, table["law_energy_change"], rtol=1e-11, atol=1e-12 * result.energy_initial)
+    assert float(result.t_final) == table["t"][-1]
+
+
+def test_max_collisions_and_t_end_overrides():
+    scene = two_balls()
+    assert heyroll.simulate(scene, max_collisions=3).n_collisions == 3
+    assert heyroll.simulate(scene, max_collisions=0).n_collisions == 0
+    short = heyroll.simulate(scene, t_end=0.1)
+    assert short.status is Status.COMPLETED and float(short.t_final) == 0.1
+
+
+def test_equal_radii_rolling_law_is_newton_with_generalized_masses():
+    a = heyroll.simulate(two_balls(r1="0.12", r2="0.12", k="0.9"), max_collisions=10).collision_table()
+    b = heyroll.simulate(two_balls(r1="0.12", r2="0.12", k="0.9", law="newton_generalized"), max_collisions=10).collision_table()
+    assert np.allclose(a["t"], b["t"], rtol=1e-14, atol=0)
+    assert np.allclose(a["dphi_i_after"], b["dphi_i_after"], rtol=1e-12)
+
+
+def test_newton_law_runs_on_centre_speeds():
+    scene = two_balls(law="newton", k="1.0")
+    table = heyroll.simulate(scene, max_collisions=5).collision_table()
+    m = np.array([float(b.mass) for b in scene.bodies])
+    rho = np.array([float(scene.track.path_radius(b)) for b in scene.bodies])
+    p_before = m[0] * rho[0] * table["dphi_i_before"] + m[1] * rho[1] * table["dphi_j_before"]
+    p_after = m[0] * rho[0] * table["dphi_i_after"] + m[1] * rho[1] * table["dphi_j_after"]
+    assert np.allclose(p_before, p_after, rtol=1e-13, atol=1e-13 * np.abs(p_before).max())
+
+
+def test_body_over_the_top_hits_its_neighbour_from_behind():
+    # Ball 2 is thrown counter-clockwise over the top and comes round to ball 1's clockwise side.
+    scene = two_balls(phi1="-0.3", phi2="0.3", dphi2="9.0", t_end="3")
+    assert all(p.reachable for p in scene.pairs)
+    result = heyroll.simulate(scene)
+    table = result.collision_table()
+    assert table.size >= 1
+    first = table[0]
+    assert (first["i"], first["j"]) == (2, 1)
+    assert first["phi_j"] + 2 * math.pi - first["phi_i"] == pytest.approx(float(scene.pairs[1].beta), abs=1e-13)
+
+
+def test_contacts_the_energy_cannot_reach_are_not_compiled():
+    scene = two_balls()
+    watched = [(p.i, p.j) for p in scene.pairs if p.reachable]
+    assert watched == [(0, 1)]
+    assert [(p.i, p.j) for p in heyroll.simulate(scene, t_end=1.0).pairs] == [(0, 1)]
+    # Same run with every contact watched: the same collisions.
+    a = heyroll.simulate(scene, max_collisions=10)
+    b = heyroll.simulate(scene, max_collisions=10, watch_all_contacts=True)
+    assert np.allclose(a.times, b.times, rtol=4 * EPS, atol=0)
+
+
+def test_bodies_starting_in_contact_and_approaching_collide_at_t0():
+    scene = two_balls()
+    beta = float(scene.pairs[0].beta)
+    text = scene_text(
+        body(radius="0.10", phi="-0.05", dphi="1.0") + body(radius="0.15", phi=repr(-0.05 + beta), dphi="-1.0"),
+    )
+    scene = parse_scene(text)
+    result = heyroll.simulate(scene, max_collisions=1)
+    assert result.n_collisions == 1 and result.times[0] == 0.0
+
+
+def test_plastic_collision_reports_persistent_contact():
+    result = heyroll.simulate(two_balls(k="0.0", r2="0.10"))
+    assert result.status is Status.CONTACT
+    assert "do not separate" in result.message and not result.success
+    assert result.n_collisions == 1
+
+
+def test_three_bodies_all_pairs_collide_without_overlap():
+    text = scene_text(
+        body(radius="0.1", phi="-1.0", dphi="2.0") + body(radius="0.1", mass="3.0", phi="0.0", dphi="0.0")
+        + body(radius="0.1", mass="0.5", phi="1.0", dphi="-2.0"),
+        extra='[collision]\nlaw = "hedrih"\nrestitution = 0.95\n[run]\nt_end = 20',
+    )
+    scene = parse_scene(text)
+    result = heyroll.simulate(scene)
+    table = result.collision_table()
+    assert result.success
+    assert {(1, 2), (2, 3)} <= set(zip(table["i"].tolist(), table["j"].tolist()))
+    assert np.all(np.diff(table["energy_after"]) <= 1e-12 * result.energy_initial)
+
+
+def test_rolling_law_outcome_that_keeps_bodies_approaching_stops_the_run():
+    # Unequal radii: omega_P and the gap rate are different multiples of phi' (issue #5).
+    result = heyroll.simulate(two_balls(k="0.8"), max_collisions=50)
+    assert result.status is Status.INCONSISTENT and not result.success
+    assert "still approach" in result.message
+    last = result.collision_table()[-1]
+    assert last["dphi_i_after"] > last["dphi_j_after"]
