@@ -1,0 +1,114 @@
+"""The heyroll command line: outputs as documented, bad input exits 2 and writes nothing."""
+
+import csv
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import heyroll
+from heyroll.interfaces.cli import main
+
+from conftest import EXAMPLE, body, scene_text
+
+REQUIRED_COLUMNS = (
+    "n,t,i,j,phi_i,phi_j,omega_i_before,omega_j_before,omega_i_after,omega_j_after,energy_before,energy_after"
+).split(",")
+SUMMARY_KEYS = {"status", "message", "collisions", "t_final", "energy_initial", "energy_final", "final_state", "wall_time_s", "versions"}
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_run_default_scene_writes_every_output(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["run", "--out", str(out), "--max-collisions", "6"]) == 0
+    assert {p.name for p in out.iterdir()} == {"collisions.csv", "summary.json", "phase_portrait.png", "energy.png"}
+    rows = read_csv(out / "collisions.csv")
+    assert list(rows[0])[: len(REQUIRED_COLUMNS)] == REQUIRED_COLUMNS
+    assert len(rows) == 6
+    summary = json.loads((out / "summary.json").read_text())
+    assert SUMMARY_KEYS <= set(summary)
+    assert summary["status"] == "max_collisions" and summary["collisions"] == 6
+    assert {"heyroll", "heyoka", "numpy"} <= set(summary["versions"])
+    assert len(summary["final_state"]) == 2 and {"phi", "dphi"} <= set(summary["final_state"][0])
+    for png in ("phase_portrait.png", "energy.png"):
+        assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "max_collisions" in capsys.readouterr().out
+
+
+def test_csv_floats_round_trip_exactly(tmp_path):
+    out = tmp_path / "out"
+    assert main(["run", str(EXAMPLE), "--out", str(out), "--no-figures"]) == 0
+    rows = read_csv(out / "collisions.csv")
+    table = heyroll.simulate(heyroll.load_scene(EXAMPLE)).collision_table()
+    assert len(rows) == table.size == 20  # [run] max_collisions = 20
+    for name in ("t", "phi_i", "omega_j_after", "energy_before"):
+        assert np.array_equal(np.array([float(r[name]) for r in rows]), table[name])
+    assert all(len(r["t"].replace(".", "").replace("-", "").split("e")[0].lstrip("0")) <= 17 for r in rows)
+
+
+def test_overrides_from_the_command_line(tmp_path):
+    out = tmp_path / "o"
+    assert main(["run", str(EXAMPLE), "--out", str(out), "--t-end", "2.5", "--max-collisions", "1000", "--no-figures"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "completed" and summary["t_final"] == 2.5
+
+
+BAD_FILES = {
+    "radius": scene_text(body(radius="1.0")),
+    "typo": scene_text(body(extra="mas = 1.0")),
+    "not toml": "[[[ not toml",
+    "overlap": scene_text(body(phi="0.0") + body(phi="0.05")),
+    "restitution": scene_text(body(phi="-1") + body(phi="1"), extra="[collision]\nrestitution = 2.0"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_bad_scene_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, case):
+    path = tmp_path / "scene.toml"
+    path.write_text(BAD_FILES[case])
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("heyroll: error: ")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["--t-end", "nan"], ["--t-end", "-1"], ["--t-end", "inf"], ["--max-collisions", "-2"], ["--max-collisions", "x"], ["--precision", "octuple"], ["--bogus"]],
+)
+def test_bad_arguments_exit_2_and_write_nothing(tmp_path, capsys, args):
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) if args == ["--bogus"] else _no_raise():
+        code = main(["run", "--out", str(out), *args])
+        assert code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "error" in err
+    assert not out.exists()
+
+
+class _no_raise:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_console_script_reports_without_traceback(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(scene_text(body(shape="cube")))
+    proc = subprocess.run(
+        [sys.executable, "-m", "heyroll.interfaces.cli", "run", str(path), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr
+    assert proc.stderr.strip() == "heyroll: error: bodies[1].shape: unknown shape 'cube'; expected one of solid_sphere | hollow_sphere | disk | ring | particle"
