@@ -23,7 +23,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--t-end", type=float, default=1e5)
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--high-accuracy", choices=["on", "off"], default="on")
+    parser.add_argument("--high-accuracy", choices=["on", "off"], default="off")
     args = parser.parse_args()
     scene = heyroll.default_scene()
     ha = args.high_accuracy == "on"

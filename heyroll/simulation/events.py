@@ -74,12 +74,13 @@ def _make_callback(system: SceneSystem, number: int, log: CollisionLog, holder: 
 
     def on_collision(ta, d_sgn):
         s = holder[0]
-        vi = s[vi_index]
-        vj = s[vj_index]
+        before = s.tolist()  # Python numbers: faster arithmetic than numpy scalars
+        vi = before[vi_index]
+        vj = before[vj_index]
         d = vi - q * vj
         vi_new = vi - a_i * d
         vj_new = vj + a_j * d
-        append((ta.time, number, s.tolist(), vi_new, vj_new))
+        append((ta.time, number, before, vi_new, vj_new))
         s[vi_index] = vi_new
         s[vj_index] = vj_new
         # The gap opens at rate vj_new - vi_new; it closed at vi - vj.
