@@ -14,14 +14,35 @@ Layers, with one-way imports: ``heyroll.model`` (bodies, tracks, laws) ->
 
 from ._version import __version__
 from .errors import SceneError, SceneFileError
-from .interfaces.scene_file import default_scene, load_scene, parse_scene
 from .model.bodies import Body, Shape
 from .model.laws import CollisionLaw, GeneralizedNewtonLaw, HedrihRollingLaw, NewtonCentreLaw, make_law
 from .model.scene import RunSettings, Scene
 from .model.tracks import CircleTrack
-from .simulation.driver import simulate
-from .simulation.precision import Precision
-from .simulation.result import TABLE_COLUMNS, SimulationResult, Status
+
+# The simulation and interface layers load heyoka and matplotlib: import them
+# on first use, so that the model layer works (and imports fast) without them.
+_LAZY = {
+    "simulate": ("heyroll.simulation.driver", "simulate"),
+    "Precision": ("heyroll.simulation.precision", "Precision"),
+    "SimulationResult": ("heyroll.simulation.result", "SimulationResult"),
+    "Status": ("heyroll.simulation.result", "Status"),
+    "TABLE_COLUMNS": ("heyroll.simulation.result", "TABLE_COLUMNS"),
+    "default_scene": ("heyroll.interfaces.scene_file", "default_scene"),
+    "load_scene": ("heyroll.interfaces.scene_file", "load_scene"),
+    "parse_scene": ("heyroll.interfaces.scene_file", "parse_scene"),
+}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        module, attribute = _LAZY[name]
+        value = getattr(importlib.import_module(module), attribute)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'heyroll' has no attribute {name!r}")
+
 
 __all__ = [
     "Body",

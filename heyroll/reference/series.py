@@ -156,7 +156,8 @@ def time_between(u0, u1, k2, omega0, antiderivative=exact_time_integral, **kwarg
 
     ``antiderivative`` is one of the functions above (extra keyword arguments,
     e.g. ``order``, are passed on). Valid on an arc where phi is monotone and
-    |phi| < pi.
+    |phi| < pi. Like (48)-(55) it assumes phi' > 0: on an arc where phi
+    decreases the time is minus this value.
     """
     I1 = antiderivative(u1, k2, **kwargs)
     I0 = antiderivative(u0, k2, **kwargs)

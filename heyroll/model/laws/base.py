@@ -93,11 +93,12 @@ def outgoing(law: CollisionLaw, track: CircleTrack, body_i: Body, body_j: Body, 
     the engine uses the equivalent :func:`impulse_map`.
     """
     vi, vj = law.variables(track, body_i), law.variables(track, body_j)
-    k = law.restitution
-    ratio_ij = vi.inertia / vj.inertia
-    ratio_ji = vj.inertia / vi.inertia
-    du = u_i - u_j
-    return u_i - (1 + k) / (1 + ratio_ij) * du, u_j + (1 + k) / (1 + ratio_ji) * du
+    with workprec():
+        k = law.restitution
+        ratio_ij = vi.inertia / vj.inertia
+        ratio_ji = vj.inertia / vi.inertia
+        du = u_i - u_j
+        return u_i - (1 + k) / (1 + ratio_ij) * du, u_j + (1 + k) / (1 + ratio_ji) * du
 
 
 def collision_impulse(inertia_i, inertia_j, k, du):
