@@ -41,6 +41,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import random
+
 import mpmath
 import numpy as np
 
@@ -76,7 +78,7 @@ class ReferenceRun:
     """A reference run: collisions, why it stopped, and the final pendulums."""
 
     collisions: list = field(default_factory=list)
-    status: str = "max_collisions"  # max_collisions | t_end | contact
+    status: str = "max_collisions"  # max_collisions | t_end | contact | inconsistent
     message: str = ""
     pendulums: list = field(default_factory=list)
     steps: int = 0
@@ -120,11 +122,18 @@ def apply_law(c_i, M_i, c_j, M_j, k, dphi_i, dphi_j):
 
 
 def _first_root(pair, pendulums, a, t_start, t_limit, dps, counter):
-    """Earliest t in [t_start, t_limit] where the pair's gap reaches 0 while closing, or None."""
+    """Earliest t in [t_start, t_limit] where the pair's gap reaches 0 while closing, or None.
+
+    Safe steps h* (module docstring) from t_start: each lands where the gap
+    is still >= 0, so no root is ever stepped over. Near a transversal root
+    the steps converge onto it quadratically; once the gap is below
+    10^-dps rad and closing, Newton's method polishes the time. A grazing
+    approach that does not touch is stepped past (the bound lets the steps
+    cross the gap's minimum).
+    """
     pi_, pj_ = pendulums[pair.i], pendulums[pair.j]
     G2 = a[pair.i] + a[pair.j]
-    tol_gap = mpmath.mpf(10) ** (-(dps // 3))
-    tol_t = mpmath.mpf(10) ** (-(dps + 3))
+    tol_gap = mpmath.mpf(10) ** (-dps)
 
     def gap(t):
         phi_i, dphi_i = pi_.state(t)
@@ -136,7 +145,7 @@ def _first_root(pair, pendulums, a, t_start, t_limit, dps, counter):
         counter[0] += 1
         g, gp = gap(t)
         if gp < 0 and g <= tol_gap:
-            return _polish(gap, t, tol_t)
+            return _polish(gap, t, dps)
         # Rounding can leave g a hair below zero right after a collision
         # (the pair then separates, gp > 0): the bound needs g >= 0.
         g = max(g, mpmath.mpf(0))
@@ -150,30 +159,53 @@ def _first_root(pair, pendulums, a, t_start, t_limit, dps, counter):
     )
 
 
-def _polish(gap, t, tol_t):
-    """Newton's method on a closing gap, from a point just before the root."""
-    for _ in range(60):
+def _polish(gap, t, dps):
+    """A few Newton steps on a closing gap already below 10^-dps rad."""
+    tol_t = mpmath.mpf(10) ** (-(dps + 3))
+    for _ in range(8):
         g, gp = gap(t)
-        if gp >= 0:
-            raise RuntimeError(f"gap stopped closing while polishing a root at t = {mpmath.nstr(t, 17)}")
+        if gp >= 0:  # tangential contact: the safe steps' point is the best there is
+            return t
         step = g / gp
         t = t - step
         if abs(step) <= tol_t * (1 + abs(t)):
-            return t
-    raise RuntimeError(f"Newton's method did not converge on a root near t = {mpmath.nstr(t, 17)}")
+            break
+    return t
 
 
-def run_reference(scene, n_collisions: int, dps: int = 40, t_end=None) -> ReferenceRun:
+def run_reference(
+    scene, n_collisions: int, dps: int = 40, t_end=None, *, double_inputs: bool = False, jitter=0, seed: int = 0
+) -> ReferenceRun:
     """The first ``n_collisions`` collisions of ``scene`` (stopping at ``t_end``).
 
-    ``t_end`` defaults to the scene's run setting. Returns a
+    ``t_end`` defaults to the scene's run setting. With ``double_inputs`` the
+    numbers a double-precision integrator has to round (every a_k, every gap
+    constant offset - beta, the initial phi and phi') are rounded once to
+    IEEE double before the exact solution starts: the reference then solves
+    exactly the problem a double run integrates, which separates the
+    integration and event-location error from the unavoidable input rounding.
+    (Rates after collisions are never rounded.)
+
+    ``jitter`` (default 0: exact) is a validation tool, not physics: after
+    every collision the two positions and the two outgoing rates are each
+    multiplied by (1 + jitter * N(0, 1)) (``random.Random(seed)``). With
+    jitter = 2**-53 (the unit roundoff of double) and ``double_inputs`` this
+    models an ideal double-precision computation that rounds the state once
+    per collision; the spread of such runs around the exact one measures how
+    much the scene itself amplifies rounding (its conditioning). The time is
+    not jittered: heyoka carries it in double-length arithmetic.
+
+    Returns a
     :class:`ReferenceRun`; its status is ``max_collisions``, ``t_end`` (no
-    further collision before t_end) or ``contact`` (the law left two bodies
-    without separation, which is not modelled).
+    further collision before t_end), ``contact`` (the law left two bodies
+    without separation, which is not modelled) or ``inconsistent`` (the
+    law's outgoing rates still close the gap, possible for the rolling law
+    with unequal radii: u = c phi' with different c).
     """
     if n_collisions < 0:
         raise ValueError("n_collisions must be >= 0")
     run = ReferenceRun()
+    rng = random.Random(seed)
     with mpmath.workdps(dps + GUARD_DPS):
         g = mpmath.mpf(scene.g)
         R = mpmath.mpf(scene.track.radius)
@@ -182,9 +214,10 @@ def run_reference(scene, n_collisions: int, dps: int = 40, t_end=None) -> Refere
         k = mpmath.mpf(scene.law.restitution)
         law = scene.law.name
         t_end = mpmath.mpf(scene.run.t_end if t_end is None else t_end)
-        a = [g / (mpmath.mpf(b.kappa) * (R - mpmath.mpf(b.radius))) for b in bodies]
+        rnd = (lambda x: mpmath.mpf(float(x))) if double_inputs else (lambda x: mpmath.mpf(x))
+        a = [rnd(g / (mpmath.mpf(b.kappa) * (R - mpmath.mpf(b.radius)))) for b in bodies]
         pendulums = [
-            ExactPendulum(a[n], scene.phi[n], scene.dphi[n], 0, dps + GUARD_DPS) for n in range(nb)
+            ExactPendulum(a[n], rnd(scene.phi[n]), rnd(scene.dphi[n]), 0, dps + GUARD_DPS) for n in range(nb)
         ]
         pairs = []
         if nb >= 2:
@@ -192,7 +225,7 @@ def run_reference(scene, n_collisions: int, dps: int = 40, t_end=None) -> Refere
                 i, j = n, (n + 1) % nb
                 offset = 2 * mpmath.pi if j == 0 else mpmath.mpf(0)
                 beta = _contact_angle(R, mpmath.mpf(bodies[i].radius), mpmath.mpf(bodies[j].radius))
-                pairs.append(_Pair(i, j, offset - beta))
+                pairs.append(_Pair(i, j, rnd(offset - beta)))
         variables = [_law_variables(law, R, b) for b in bodies] if pairs else []
         counter = [0]
         t = mpmath.mpf(0)
@@ -220,13 +253,22 @@ def run_reference(scene, n_collisions: int, dps: int = 40, t_end=None) -> Refere
                         dphi_i_after=+out_i, dphi_j_after=+out_j,
                     )
                 )
-            if out_j - out_i <= mpmath.mpf(10) ** (-dps // 2) * abs(dphi_i - dphi_j):
-                run.status = "contact"
-                run.message = (
-                    f"collision {len(run.collisions)} at t = {mpmath.nstr(t, 17)}: bodies {i + 1} and {j + 1} "
-                    "do not separate after the law"
-                )
+            opening, tiny = out_j - out_i, mpmath.mpf(10) ** (-(dps // 2)) * abs(dphi_i - dphi_j)
+            if opening <= tiny:
+                where = f"collision {len(run.collisions)} at t = {mpmath.nstr(t, 17)}: bodies {i + 1} and {j + 1}"
+                if opening < -tiny:
+                    run.status = "inconsistent"
+                    run.message = f"{where} still approach after the '{law}' law (they would overlap)"
+                else:
+                    run.status = "contact"
+                    run.message = f"{where} do not separate after the law (persistent contact)"
                 break
+            if jitter:
+                # Model of an ideal double-precision computation: one relative
+                # rounding of size ~jitter on every quantity carried past the collision.
+                def nudge(x):
+                    return x * (1 + jitter * rng.gauss(0, 1))
+                phi_i, phi_j, out_i, out_j = (nudge(x) for x in (phi_i, phi_j, out_i, out_j))
             # Only the two colliding bodies start a new pendulum arc; the
             # others keep theirs (no re-initialisation, no accumulated error).
             pendulums[i] = ExactPendulum(a[i], phi_i, out_i, t, dps + GUARD_DPS)
@@ -238,13 +280,14 @@ def run_reference(scene, n_collisions: int, dps: int = 40, t_end=None) -> Refere
     return run
 
 
-def reference_collisions(scene, n_collisions: int, dps: int = 40, t_end=None) -> list:
+def reference_collisions(scene, n_collisions: int, dps: int = 40, t_end=None, *, double_inputs: bool = False) -> list:
     """The first ``n_collisions`` collisions of ``scene`` as a list of :class:`ReferenceCollision`.
 
     Fewer are returned if the run reaches ``t_end`` (default: the scene's)
-    or two bodies stop separating; use :func:`run_reference` for the reason.
+    or two bodies stop separating; use :func:`run_reference` for the reason
+    and for ``double_inputs``.
     """
-    return run_reference(scene, n_collisions, dps=dps, t_end=t_end).collisions
+    return run_reference(scene, n_collisions, dps=dps, t_end=t_end, double_inputs=double_inputs).collisions
 
 
 def reference_table(collisions) -> np.ndarray:

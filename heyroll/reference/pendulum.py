@@ -120,7 +120,7 @@ class ExactPendulum:
                 # the amplitude am(u0) is the angle of that point, u0 = F(am | m).
                 theta0 = mpmath.atan2(mpmath.sin(psi0 / 2), dphi0 / (2 * sqa))
                 u0 = mpmath.ellipf(theta0, m)
-                c.update(centre=centre, K=K, u0=u0, sqrt_m=mpmath.sqrt(m))
+                c.update(centre=centre, K=K, theta0=theta0, u0=u0, sqrt_m=mpmath.sqrt(m))
             elif one_minus_m < 0:
                 regime = ROTATION
                 k2 = 1 / m  # the paper's k^2 = 4a/C < 1 (eq. 46)
@@ -236,8 +236,9 @@ class ExactPendulum:
           branch is the whole future motion (angles unwrapped).
         * libration (k^2 > 1): reciprocal-modulus transformation,
           F(theta | k^2) = F(psi | 1/k^2) / k with sin psi = k sin theta,
-          so t - t0 = [F(psi | m) - F(psi0 | m)] / sqrt(a); the branch runs
-          from the current point to the next turning point (psi = +-pi/2).
+          so t - t0 = [F(psi | m) - F(psi0 | m)] / sqrt(a); psi is the
+          Jacobi amplitude of sn(sqrt(a)(t - tau) | m), and the branch runs
+          from the current point to the next turning point (psi = pi/2 + k pi).
         * separatrix: t - t0 = [atanh(sin(phi/2)) - atanh(sin(phi0/2))] / sqrt(a).
 
         Returns None if ``phi`` is not on the branch (behind the body, or
@@ -254,13 +255,25 @@ class ExactPendulum:
             elif self.regime == LIBRATION:
                 psi = phi - c["centre"]
                 x = mpmath.sin(psi / 2) / c["sqrt_m"]
-                if abs(psi) >= mpmath.pi or abs(x) > 1:
+                # A target given at the amplitude (rounded to dps digits) counts as reached.
+                if abs(psi) >= mpmath.pi or abs(x) > 1 + mpmath.mpf(10) ** -self.dps:
                     return None
-                x0 = mpmath.sin((self.phi0 - c["centre"]) / 2) / c["sqrt_m"]
-                x0 = max(-1, min(1, x0))
-                F = mpmath.ellipf(mpmath.asin(x), self.m)
-                F0 = mpmath.ellipf(mpmath.asin(x0), self.m)
-                dt = s * (F - F0) / c["sqrt_a"]
+                x = max(-1, min(1, x))
+                # psi here is the Jacobi amplitude: sin(amplitude) = x. The
+                # current point is am(u0) = theta0 (kept from the start, not
+                # recomputed with asin, which loses half the digits at a
+                # turning point). The branch ends at the next turning point,
+                # amplitude pi/2 + k pi: k even at the upper one, odd at the lower one.
+                theta0 = c["theta0"]
+                half_pi = mpmath.pi / 2
+                if self.dphi0 == 0:
+                    k = int(mpmath.nint((theta0 + half_pi) / mpmath.pi))
+                else:
+                    k = int(mpmath.ceil((theta0 - half_pi) / mpmath.pi))
+                theta = k * mpmath.pi + (mpmath.asin(x) if k % 2 == 0 else -mpmath.asin(x))
+                if theta < theta0:
+                    return None
+                dt = (mpmath.ellipf(theta, self.m) - c["u0"]) / c["sqrt_a"]
             else:
                 psi = phi - c["centre"]
                 if abs(psi) >= mpmath.pi:

@@ -64,7 +64,10 @@ class Precision:
         """Round an mpmath (or Python) number once to this precision."""
         if self.name == "double":
             return float(value)
-        text = mpmath.nstr(mpmath.mpf(value), self.digits + 10, strip_zeros=False, min_fixed=1, max_fixed=0)
+        # Inside a wide working precision: a bare mpf() would round to mpmath's
+        # global 53 bits before the text is made.
+        with mpmath.workprec(max(256, 2 * self.bits)):
+            text = mpmath.nstr(mpmath.mpf(value), self.digits + 10, strip_zeros=False, min_fixed=1, max_fixed=0)
         if self.name == "quad":
             return hy.real128(text)
         return hy.real(text, self.bits)
