@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import time
 
 import heyoka as hy
@@ -66,7 +67,15 @@ def simulate(
     else:
         _collide_touching_pairs(system, events, ta, holder)
         if log.stop.reason is None:
-            result = ta.propagate_until(precision.number(t_end))
+            # The log grows by one small list per collision: the cyclic garbage
+            # collector would rescan it again and again, for nothing (no cycles).
+            gc_was_enabled = gc.isenabled()
+            gc.disable()
+            try:
+                result = ta.propagate_until(precision.number(t_end))
+            finally:
+                if gc_was_enabled:
+                    gc.enable()
             outcome, steps = result[0], int(result[3])
 
     status, message = _status(log, outcome, t_end)
