@@ -81,7 +81,7 @@ def test_bad_scene_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, ca
 
 @pytest.mark.parametrize(
     "args",
-    [["--t-end", "nan"], ["--t-end", "-1"], ["--t-end", "inf"], ["--max-collisions", "-2"], ["--max-collisions", "x"], ["--precision", "octuple"], ["--bogus"]],
+    [["--t-end", "nan"], ["--t-end", "-1"], ["--t-end", "inf"], ["--max-collisions", "-2"], ["--max-collisions", "x"], ["--precision", "octuple"], ["--precision", "mp:12"], ["--bogus"]],
 )
 def test_bad_arguments_exit_2_and_write_nothing(tmp_path, capsys, args):
     out = tmp_path / "out"
@@ -112,3 +112,17 @@ def test_console_script_reports_without_traceback(tmp_path):
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
     assert proc.stderr.strip() == "heyroll: error: bodies[1].shape: unknown shape 'cube'; expected one of solid_sphere | hollow_sphere | disk | ring | particle"
+
+
+def test_quad_run_writes_36_digit_round_trip_table(tmp_path):
+    import heyoka
+
+    out = tmp_path / "q"
+    assert main(["run", "--out", str(out), "--max-collisions", "3", "--precision", "quad", "--no-figures"]) == 0
+    rows = read_csv(out / "collisions.csv")
+    result = heyroll.simulate(heyroll.default_scene(), max_collisions=3, precision="quad")
+    for row, t in zip(rows, result.times):
+        digits = row["t"].lstrip("-").replace(".", "").lstrip("0")
+        assert len(digits) == 36
+        assert heyoka.real128(row["t"]) == t
+    assert json.loads((out / "summary.json").read_text())["significant_digits"] == 36

@@ -60,7 +60,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", default="heyroll-out", help="output directory (default: heyroll-out)")
     run.add_argument("--t-end", dest="t_end", help="end time in s (overrides [run] t_end)")
     run.add_argument("--max-collisions", dest="max_collisions", help="stop after N collisions")
-    run.add_argument("--precision", default="double", help="double (quad and mp:BITS: Python API only, for now)")
+    run.add_argument(
+        "--precision", default="double", help="double | quad | mp:BITS: the whole integration in that type (default: double)"
+    )
     run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (slower; for very long runs)")
     run.add_argument("--no-figures", action="store_true", help="skip phase_portrait.png and energy.png")
     show = sub.add_parser("default-scene", help="print the built-in default scene as TOML")
@@ -86,10 +88,6 @@ def _run(args) -> int:
     t_end = _positive_time(args.t_end) if args.t_end is not None else None
     max_collisions = _collision_count(args.max_collisions) if args.max_collisions is not None else ...
     precision = Precision.parse(args.precision, "--precision")
-    if precision.name != "double":
-        # The engine runs in quad and MPFR (API: simulate(..., precision="quad")), but the
-        # table writer still rounds to 17 digits; refuse rather than write a misleading file.
-        raise BadInput("--precision", f"{precision.name} tables are not written yet: use double, or the Python API")
     scene = load_scene(args.scene) if args.scene else default_scene()
     out = Path(args.out)
     if out.exists() and not out.is_dir():

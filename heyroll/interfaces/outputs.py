@@ -35,16 +35,26 @@ def atomic_write_text(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-def collisions_csv(table: np.ndarray, digits: int = 17) -> str:
-    """The collision table as CSV text, floats with ``digits`` significant digits."""
+def collisions_csv(table: np.ndarray, digits: int = 17, format_value=None) -> str:
+    """The collision table as CSV text.
+
+    Float columns get ``digits`` significant digits (17 round-trips a double);
+    object columns (quad / MPFR runs) are written by ``format_value``.
+    """
     names = table.dtype.names
     float_fmt = f"%.{digits}g"
-    fmt = [("%d" if name in INTEGER_COLUMNS else float_fmt) for name in names]
     lines = [",".join(names)]
     if table.size:
-        columns = [table[name] for name in names]
-        row_fmt = ",".join(fmt)
-        lines.extend(row_fmt % tuple(values) for values in zip(*columns))
+        formatters = []
+        for name in names:
+            if name in INTEGER_COLUMNS:
+                formatters.append(str)
+            elif table.dtype[name] == object:
+                formatters.append(format_value)
+            else:
+                formatters.append(lambda x, f=float_fmt: f % x)
+        columns = [table[name].tolist() for name in names]
+        lines.extend(",".join(f(v) for f, v in zip(formatters, values)) for values in zip(*columns))
     return "\n".join(lines) + "\n"
 
 
@@ -60,7 +70,9 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
     """Write collisions.csv, summary.json and (optionally) the figures into ``out_dir``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     files = {"collisions": "collisions.csv", "summary": "summary.json"}
-    atomic_write_text(out_dir / "collisions.csv", collisions_csv(result.collision_table()))
+    precision = result.precision
+    table = result.collision_table(native=True)
+    atomic_write_text(out_dir / "collisions.csv", collisions_csv(table, precision.digits, precision.format))
     if figures:
         from .figures import energy_figure, phase_portrait_figure
 

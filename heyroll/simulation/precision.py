@@ -58,7 +58,7 @@ class Precision:
     @property
     def digits(self) -> int:
         """Significant decimal digits that round-trip a number of this type."""
-        return 17 if self.bits == 53 else math.ceil(self.bits * math.log10(2)) + 2
+        return math.ceil(self.bits * math.log10(2)) + 1  # 17 for double, 36 for quad
 
     def number(self, value):
         """Round an mpmath (or Python) number once to this precision."""
@@ -76,15 +76,11 @@ class Precision:
         return {} if self.name == "double" else {"fp_type": self.fp_type}
 
     def format(self, value) -> str:
-        """Text that reads back to the same number at this precision."""
+        """Text with enough significant digits to read back to the same number."""
         if self.name == "double":
             return f"{float(value):.17g}"
-        return mpmath.nstr(_to_mpf(value, self.bits), self.digits, strip_zeros=False)
+        with mpmath.workprec(self.bits + 16):
+            return mpmath.nstr(mpmath.mpf(str(value)), self.digits, strip_zeros=False)
 
 
 DOUBLE = Precision("double", 53)
-
-
-def _to_mpf(value, bits):
-    with mpmath.workprec(bits + 16):
-        return mpmath.mpf(str(value))

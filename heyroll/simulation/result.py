@@ -41,25 +41,31 @@ INTEGER_COLUMNS = ("n", "i", "j")
 
 @dataclass(frozen=True)
 class BodyConstants:
-    """Per-body numbers in the run's type for vectorized post-processing."""
+    """Per-body numbers for vectorized post-processing, in one number type."""
 
     generalized_mass: np.ndarray
     weight_moment: np.ndarray
     rolling_ratio: np.ndarray  # (R - r)/r, NaN for particles
 
 
-def body_constants(scene: Scene) -> BodyConstants:
+def body_constants(scene: Scene, number=float) -> BodyConstants:
+    """The constants rounded by ``number`` (float, or a Precision's ``number`` for quad/MPFR)."""
     tr, g = scene.track, scene.g
+    nan = number(float("nan"))
     return BodyConstants(
-        generalized_mass=np.array([float(tr.generalized_mass(b)) for b in scene.bodies]),
-        weight_moment=np.array([float(tr.weight_moment(b, g)) for b in scene.bodies]),
-        rolling_ratio=np.array([np.nan if b.is_particle else float(tr.rolling_ratio(b)) for b in scene.bodies]),
+        generalized_mass=np.array([number(tr.generalized_mass(b)) for b in scene.bodies]),
+        weight_moment=np.array([number(tr.weight_moment(b, g)) for b in scene.bodies]),
+        rolling_ratio=np.array([nan if b.is_particle else number(tr.rolling_ratio(b)) for b in scene.bodies]),
     )
 
 
 def body_energies(constants: BodyConstants, states: np.ndarray) -> np.ndarray:
-    """Mechanical energy of every body (columns) for each state row (eq. 26)."""
-    states = np.atleast_2d(np.asarray(states, dtype=float))
+    """Mechanical energy of every body (columns) for each state row (eq. 26).
+
+    Works in the number type of ``states`` and ``constants`` (float64, or
+    heyoka's real128 / real arrays, whose numpy ufuncs keep their precision).
+    """
+    states = np.atleast_2d(np.asarray(states))
     n = constants.generalized_mass.size
     return mechanical_energy(constants.generalized_mass, constants.weight_moment, states[:, :n], states[:, n:], np.sin)
 
@@ -116,22 +122,30 @@ class SimulationResult:
     def energy_final(self) -> float:
         return self.energy(self.final_state)
 
-    def collision_table(self) -> np.ndarray:
-        """One row per collision as a numpy structured array (columns TABLE_COLUMNS)."""
+    def collision_table(self, native: bool = False) -> np.ndarray:
+        """One row per collision as a numpy structured array (columns TABLE_COLUMNS).
+
+        By default every float column is float64. With ``native=True`` a quad or
+        MPFR run keeps its own number type (object columns holding heyoka
+        real128 / real values), so its table can be written in full digits.
+        """
+        native = native and self.precision.name != "double"
+        number = self.precision.number if native else float
+        as_array = np.asarray if native else (lambda x: np.asarray(x, dtype=float))
         n = self.n_collisions
-        dtype = [(c, np.int64 if c in INTEGER_COLUMNS else np.float64) for c in TABLE_COLUMNS]
+        float_type = object if native else np.float64
+        dtype = [(c, np.int64 if c in INTEGER_COLUMNS else float_type) for c in TABLE_COLUMNS]
         table = np.zeros(n, dtype=dtype)
         if n == 0:
             return table
         nb = self.n_bodies
-        before = np.asarray(self.states_before, dtype=float)
-        after = np.asarray(self.states_after, dtype=float)
+        before, after = as_array(self.states_before), as_array(self.states_after)
         i = np.array([p.i for p in self.pairs], dtype=np.int64)[self.pair_numbers]
         j = np.array([p.j for p in self.pairs], dtype=np.int64)[self.pair_numbers]
         rows = np.arange(n)
-        c = self.constants()
+        c = body_constants(self.scene, number)
         table["n"] = rows + 1
-        table["t"] = np.asarray(self.times, dtype=float)
+        table["t"] = as_array(self.times)
         table["i"], table["j"] = i + 1, j + 1
         table["phi_i"], table["phi_j"] = before[rows, i], before[rows, j]
         for side, idx in (("i", i), ("j", j)):
@@ -141,21 +155,21 @@ class SimulationResult:
             table[f"omega_{side}_after"] = c.rolling_ratio[idx] * after[rows, nb + idx]
         table["energy_before"] = body_energies(c, before).sum(axis=1)
         table["energy_after"] = body_energies(c, after).sum(axis=1)
-        impulse, change = self._law_quantities(i, j, before[rows, nb + i], before[rows, nb + j])
+        impulse, change = self._law_quantities(i, j, before[rows, nb + i], before[rows, nb + j], number)
         table["law_impulse"], table["law_energy_change"] = impulse, change
         return table
 
-    def _law_quantities(self, i, j, dphi_i, dphi_j):
+    def _law_quantities(self, i, j, dphi_i, dphi_j, number=float):
         """Moment of the collision impulse (eq. 12) and kinetic-energy change (eq. 15)."""
         law, tr, bodies = self.scene.law, self.scene.track, self.scene.bodies
-        k = float(law.restitution)
-        impulse = np.empty(i.size)
-        change = np.empty(i.size)
+        k = number(law.restitution)
+        impulse = np.empty(i.size, dtype=dphi_i.dtype)
+        change = np.empty(i.size, dtype=dphi_i.dtype)
         for pair in {(a, b) for a, b in zip(i.tolist(), j.tolist())}:
             mask = (i == pair[0]) & (j == pair[1])
             vi, vj = law.variables(tr, bodies[pair[0]]), law.variables(tr, bodies[pair[1]])
-            mi, mj = float(vi.inertia), float(vj.inertia)
-            du = float(vi.scale) * dphi_i[mask] - float(vj.scale) * dphi_j[mask]
+            mi, mj = number(vi.inertia), number(vj.inertia)
+            du = number(vi.scale) * dphi_i[mask] - number(vj.scale) * dphi_j[mask]
             impulse[mask] = collision_impulse(mi, mj, k, du)
             change[mask] = kinetic_energy_change(mi, mj, k, du)
         return impulse, change
@@ -177,6 +191,8 @@ class SimulationResult:
             "wall_time_s": self.wall_time_s,
             "steps": self.steps,
             "precision": self.precision.name,
+            "significant_digits": self.precision.digits,
+            "t_final_text": self.precision.format(self.t_final),
             "law": self.scene.law.name,
             "restitution": float(self.scene.law.restitution),
             "watched_contacts": [[p.i + 1, p.j + 1] for p in self.pairs],
