@@ -39,13 +39,13 @@ def _positive_time(text: str) -> float:
     return value
 
 
-def _collision_count(text: str) -> int:
+def _collision_count(text: str, field: str = "--max-collisions") -> int:
     try:
         value = int(text)
     except ValueError:
-        raise BadInput("--max-collisions", f"must be a whole number, got {text!r}") from None
+        raise BadInput(field, f"must be a whole number, got {text!r}") from None
     if value < 0:
-        raise BadInput("--max-collisions", f"must be >= 0, got {value}")
+        raise BadInput(field, f"must be >= 0, got {value}")
     return value
 
 
@@ -65,6 +65,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (slower; for very long runs)")
     run.add_argument("--no-figures", action="store_true", help="skip phase_portrait.png and energy.png")
+    val = sub.add_parser("validate", help="write a validation report: engine vs exact reference, series error, horizon")
+    val.add_argument("scene", nargs="?", help="scene file (TOML); the built-in default scene if omitted")
+    val.add_argument("--out", default="heyroll-validation", help="output directory (default: heyroll-validation)")
+    val.add_argument("--collisions", default="20", help="collisions compared with the reference (default: 20)")
     show = sub.add_parser("default-scene", help="print the built-in default scene as TOML")
     show.set_defaults()
     return parser
@@ -77,6 +81,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "default-scene":
             sys.stdout.write(default_scene_text())
             return EXIT_OK
+        if args.command == "validate":
+            return _validate(args)
         return _run(args)
     except SceneError as exc:
         print(f"heyroll: error: {exc}", file=sys.stderr)
@@ -109,6 +115,21 @@ def _run(args) -> int:
     )
     print(f"wrote {out}/")
     return EXIT_OK if result.success else EXIT_RUN_FAILED
+
+
+def _validate(args) -> int:
+    collisions = _collision_count(args.collisions, "--collisions")
+    if collisions < 1:
+        raise BadInput("--collisions", "must be >= 1")
+    scene = load_scene(args.scene) if args.scene else default_scene()
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise BadInput("--out", f"{out} exists and is not a directory")
+    from .report import validate
+
+    path = validate(scene, out, source=args.scene or "<default scene>", collisions=collisions)
+    print(f"wrote {path}")
+    return EXIT_OK
 
 
 if __name__ == "__main__":  # pragma: no cover
