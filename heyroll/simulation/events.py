@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import heyoka as hy
+import mpmath
+import numpy as np
 
 from .system import SceneSystem
 
@@ -59,10 +61,58 @@ def collision_events(system: SceneSystem, log: CollisionLog, state_view_holder: 
     return events
 
 
+#: numpy's extended type where it has more bits than a double (x86: 64-bit
+#: mantissa), else None: then the map runs in the run's own type.
+EXTENDED = np.longdouble if np.finfo(np.longdouble).nmant > 52 else None
+
+
+@dataclass(frozen=True)
+class WorkingMap:
+    """The collision map of one pair in the arithmetic a run applies it in.
+
+    D = phi_i' - q phi_j';  phi_i'+ = phi_i' - a_i D;  phi_j'+ = phi_j' + a_j D,
+    with a_i = (1 + k) - q a_j enforced on the rounded constants, which makes
+    the elastic map conserve a fixed quadratic form (within a rounding of the
+    kinetic energy) exactly: no constant's rounding biases every collision the
+    same way. Double runs evaluate the map in extended precision and round the
+    two outgoing rates once, so the energy error of a long elastic run is a
+    random walk (Brouwer's law), not a drift.
+    """
+
+    q: object
+    a_i: object
+    a_j: object
+    extended: bool
+
+
+def working_map(law_map, precision) -> WorkingMap:
+    """Round the law's constants once for ``precision`` (see :class:`WorkingMap`)."""
+    extended = precision.name == "double" and EXTENDED is not None
+    if extended:
+
+        def num(x):
+            with mpmath.workprec(256):
+                return EXTENDED(mpmath.nstr(mpmath.mpf(x), 25, strip_zeros=False))
+
+    else:
+        num = precision.number
+
+    def exact(x):
+        if hasattr(x, "as_integer_ratio"):  # float, longdouble: the binary value exactly
+            n, d = x.as_integer_ratio()
+            return mpmath.mpf(n) / d
+        return mpmath.mpf(str(x))  # real128 / real: their text round-trips at their precision
+
+    q, a_j = num(law_map.q), num(law_map.a_j)
+    with mpmath.workprec(4 * max(precision.bits, 64) + 64):
+        a_i = num(law_map.one_plus_k - exact(q) * exact(a_j))  # a_i + q a_j = 1 + k
+    return WorkingMap(q=q, a_i=a_i, a_j=a_j, extended=extended)
+
+
 def _make_callback(system: SceneSystem, number: int, log: CollisionLog, holder: list):
     pair = system.pairs[number]
-    num = system.precision.number
-    q, a_i, a_j = num(pair.law_map.q), num(pair.law_map.a_i), num(pair.law_map.a_j)
+    law_map = working_map(pair.law_map, system.precision)
+    q, a_i, a_j = law_map.q, law_map.a_i, law_map.a_j
     vi_index = system.n_bodies + pair.i
     vj_index = system.n_bodies + pair.j
     tiny = SEPARATION_ULPS * system.precision.epsilon
@@ -71,15 +121,22 @@ def _make_callback(system: SceneSystem, number: int, log: CollisionLog, holder: 
     limit = log.max_collisions
     stop = log.stop
     law_name = system.law_name
+    extended = law_map.extended
 
     def on_collision(ta, d_sgn):
         s = holder[0]
         before = s.tolist()  # Python numbers: faster arithmetic than numpy scalars
         vi = before[vi_index]
         vj = before[vj_index]
-        d = vi - q * vj
-        vi_new = vi - a_i * d
-        vj_new = vj + a_j * d
+        if extended:
+            ei, ej = EXTENDED(vi), EXTENDED(vj)
+            d = ei - q * ej
+            vi_new = float(ei - a_i * d)
+            vj_new = float(ej + a_j * d)
+        else:
+            d = vi - q * vj
+            vi_new = vi - a_i * d
+            vj_new = vj + a_j * d
         append((ta.time, number, before, vi_new, vj_new))
         s[vi_index] = vi_new
         s[vj_index] = vj_new

@@ -32,6 +32,14 @@ class ImpulseMap:
     q: mpmath.mpf
     a_i: mpmath.mpf
     a_j: mpmath.mpf
+    #: 1 + k; with it the map reads D = phi_i' - q phi_j', Delta = (1 + k) D / (1 + q r),
+    #: phi_i'+ = phi_i' - Delta, phi_j'+ = phi_j' + r Delta, where r = a_j / a_i.
+    one_plus_k: mpmath.mpf | None = None
+
+    @property
+    def r(self) -> mpmath.mpf:
+        with workprec():
+            return self.a_j / self.a_i
 
 
 @dataclass(frozen=True)
@@ -78,6 +86,7 @@ def impulse_map(law: CollisionLaw, track: CircleTrack, body_i: Body, body_j: Bod
             q=vj.scale / vi.scale,
             a_i=(1 + k) * vj.inertia / total,
             a_j=(1 + k) * vi.inertia * vi.scale / (total * vj.scale),
+            one_plus_k=1 + k,
         )
 
 
