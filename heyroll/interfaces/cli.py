@@ -8,7 +8,9 @@ written).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+import signal
 import sys
 from pathlib import Path
 
@@ -17,7 +19,7 @@ from ..simulation.driver import simulate
 from ..simulation.precision import Precision
 from .scene_file import default_scene, default_scene_text, load_scene
 
-EXIT_OK, EXIT_RUN_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_RUN_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 class BadInput(SceneError):
@@ -65,6 +67,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (slower; for very long runs)")
     run.add_argument("--no-figures", action="store_true", help="skip phase_portrait.png and energy.png")
+    run.add_argument(
+        "--table", choices=("csv", "npy"), default="csv",
+        help="collision table format: csv (default) or npy (float64 columns, for long runs; numpy.load reads it)",
+    )
+    run.add_argument("--progress", choices=("auto", "on", "off"), default="auto", help="progress bar on stderr (auto: if a terminal)")
     val = sub.add_parser("validate", help="write a validation report: engine vs exact reference, series error, horizon")
     val.add_argument("scene", nargs="?", help="scene file (TOML); the built-in default scene if omitted")
     val.add_argument("--out", default="heyroll-validation", help="output directory (default: heyroll-validation)")
@@ -98,13 +105,17 @@ def _run(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise BadInput("--out", f"{out} exists and is not a directory")
-    result = simulate(
-        scene, t_end=t_end, max_collisions=max_collisions, precision=precision, high_accuracy=args.high_accuracy
-    )
+    if args.table == "npy" and precision.name != "double":
+        raise BadInput("--table", "npy holds float64 columns: use csv for quad and MPFR runs")
+    from .outputs import table_sink, write_run
 
-    from .outputs import write_run
-
-    write_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures)
+    sink = table_sink(out, args.table)
+    with _progress_bar(args.progress, scene, t_end) as progress, _sigterm_as_interrupt():
+        result = simulate(
+            scene, t_end=t_end, max_collisions=max_collisions, precision=precision,
+            high_accuracy=args.high_accuracy, sink=sink, progress=progress,
+        )
+    write_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures, sink=sink)
     rate = result.n_collisions / result.wall_time_s if result.wall_time_s > 0 else float("nan")
     print(f"{scene.describe()}")
     print(f"{result.status.value}: {result.message}")
@@ -114,7 +125,51 @@ def _run(args) -> int:
         f"{result.wall_time_s:.3g} s wall ({rate:.3g} collisions/s incl. set-up)"
     )
     print(f"wrote {out}/")
+    if result.status.value == "interrupted":
+        return EXIT_INTERRUPTED
     return EXIT_OK if result.success else EXIT_RUN_FAILED
+
+
+@contextlib.contextmanager
+def _progress_bar(mode: str, scene, t_end):
+    """A tqdm bar over simulated time, or None (no bar)."""
+    import tqdm
+
+    disable = {"on": False, "off": True, "auto": None}[mode]  # tqdm: None = only on a terminal
+    total = float(scene.run.t_end if t_end is None else t_end)
+    bar = tqdm.tqdm(total=total, unit="s", desc="heyroll", disable=disable, file=sys.stderr,
+                    bar_format="{desc}: {percentage:3.0f}%|{bar}| t = {n:.4g}/{total:.4g} s {postfix}")
+    if bar.disable:
+        yield None
+        return
+
+    def progress(t, collisions):
+        bar.n = min(t, total)
+        bar.set_postfix_str(f"{collisions} collisions", refresh=False)
+        bar.refresh()
+
+    try:
+        yield progress
+    finally:
+        bar.close()
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """SIGTERM ends a run like Ctrl-C: the table up to the last collision, status interrupted."""
+
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _validate(args) -> int:

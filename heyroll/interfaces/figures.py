@@ -36,7 +36,7 @@ def phase_portrait_figure(result: SimulationResult, path: Path, *, collisions: i
     fixed phi from the incoming to the outgoing phase curve.
     """
     n_bodies = result.n_bodies
-    shown = min(collisions, result.n_collisions)
+    shown = min(collisions, result.kept_collisions)
     branches = sample_branches(result, max_branches=shown + 1)
     fig = Figure(figsize=(8, 3.2 * n_bodies), layout="constrained")
     stiffness = [float(result.scene.track.angular_stiffness(b, result.scene.g)) for b in result.scene.bodies]
@@ -93,10 +93,13 @@ def _branch_colours(n: int):
 def energy_figure(result: SimulationResult, path: Path) -> None:
     """Mechanical energy of each body and of the system across collisions (4.2.6)."""
     c = result.constants()
-    t = np.concatenate([[0.0], np.asarray(result.times, dtype=float), [float(result.t_final)]])
+    streamed = result.kept_collisions < result.n_collisions
+    t_last = [] if streamed else [float(result.t_final)]
+    t = np.concatenate([[0.0], np.asarray(result.times, dtype=float), t_last])
     states = [np.asarray(result.initial_state, dtype=float)]
     states += list(np.asarray(result.states_after, dtype=float))
-    states.append(np.asarray(result.final_state, dtype=float))
+    if not streamed:
+        states.append(np.asarray(result.final_state, dtype=float))
     energies = body_energies(c, np.array(states))
     fig = Figure(figsize=(8, 4.2), layout="constrained")
     ax = fig.add_subplot(1, 1, 1)
@@ -108,7 +111,9 @@ def energy_figure(result: SimulationResult, path: Path) -> None:
     total0 = energies[0].sum()
     drift = (energies[-1].sum() - total0) / total0 if total0 else 0.0
     ax.set_title(
-        f"Energy exchanged at {result.n_collisions} collisions "
+        f"Energy exchanged at {result.kept_collisions}"
+        + (f" (the first, of {result.n_collisions})" if streamed else "")
+        + " collisions "
         f"(law {result.scene.law.name}, k = {float(result.scene.law.restitution):g}; "
         f"relative change of the total {drift:.2e})",
         fontsize=9,

@@ -16,7 +16,7 @@ import mpmath
 import numpy as np
 
 from .._version import __version__
-from ..simulation.result import INTEGER_COLUMNS, SimulationResult
+from ..simulation.result import INTEGER_COLUMNS, TABLE_COLUMNS, SimulationResult, build_collision_table
 
 
 def versions() -> dict:
@@ -58,6 +58,96 @@ def collisions_csv(table: np.ndarray, digits: int = 17, format_value=None) -> st
     return "\n".join(lines) + "\n"
 
 
+class _TableFile:
+    """A collision table written chunk by chunk under a temporary name.
+
+    ``close`` renames it into place, so the file at ``path`` is always a
+    complete table: of the whole run, or of every collision before an
+    interruption.
+    """
+
+    def __init__(self, path: Path):
+        self.path = str(path)
+        self._final = Path(path)
+        self._tmp = self._final.with_name(f".{self._final.name}.tmp")
+        self._file = None
+        self.rows = 0
+
+    def open(self, scene, pairs, precision) -> None:
+        self.scene, self.pairs, self.precision = scene, pairs, precision
+        self._file = open(self._tmp, "wb")
+        self._start()
+
+    def write(self, chunk: tuple, first_number: int) -> None:
+        times, numbers, before, after = chunk
+        table = build_collision_table(
+            self.scene, self.pairs, self.precision, times, numbers, before, after,
+            first_number=first_number, native=True,
+        )
+        self._append(table)
+        self.rows += table.size
+
+    def close(self) -> None:
+        if self._file is None:
+            return
+        self._finish()
+        self._file.close()
+        self._file = None
+        os.replace(self._tmp, self._final)
+
+
+class CsvTableSink(_TableFile):
+    """collisions.csv: header row, then one row per collision (17 digits for double)."""
+
+    format = "csv"
+
+    def _start(self):
+        self._file.write((",".join(TABLE_COLUMNS) + "\n").encode())
+
+    def _append(self, table):
+        text = collisions_csv(table, self.precision.digits, self.precision.format)
+        self._file.write(text.split("\n", 1)[1].encode())
+
+    def _finish(self):
+        pass
+
+
+class NpyTableSink(_TableFile):
+    """collisions.npy: one structured numpy array (float64 / int64 columns).
+
+    ``numpy.load("collisions.npy")`` reads it, and ``pandas.DataFrame(...)`` of
+    that; the header is rewritten with the final row count at the end.
+    """
+
+    format = "npy"
+    HEADER_BYTES = 4096
+
+    def open(self, scene, pairs, precision) -> None:
+        if precision.name != "double":
+            raise ValueError("the npy table holds float64: use csv for quad and MPFR runs")
+        super().open(scene, pairs, precision)
+
+    def _header(self, rows: int) -> bytes:
+        dtype = build_collision_table(self.scene, (), self.precision, [], [], [], []).dtype
+        d = {"descr": np.lib.format.dtype_to_descr(dtype), "fortran_order": False, "shape": (rows,)}
+        text = repr(d).encode("latin1")
+        text += b" " * (self.HEADER_BYTES - 10 - len(text) - 1) + b"\n"
+        return b"\x93NUMPY\x01\x00" + len(text).to_bytes(2, "little") + text
+
+    def _start(self):
+        self._file.write(self._header(0))
+
+    def _append(self, table):
+        self._file.write(np.ascontiguousarray(table).tobytes())
+
+    def _finish(self):
+        self._file.seek(0)
+        self._file.write(self._header(self.rows))
+
+
+TABLE_SINKS = {"csv": CsvTableSink, "npy": NpyTableSink}
+
+
 def summary_dict(result: SimulationResult, *, scene_source: str, files: dict) -> dict:
     data = result.summary()
     data["scene"] = {"name": result.scene.name, "source": scene_source, "description": result.scene.describe()}
@@ -66,13 +156,22 @@ def summary_dict(result: SimulationResult, *, scene_source: str, files: dict) ->
     return data
 
 
-def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, figures: bool = True) -> dict:
-    """Write collisions.csv, summary.json and (optionally) the figures into ``out_dir``."""
+def table_sink(out_dir: Path, table_format: str = "csv") -> _TableFile:
+    """A sink that streams the run's collision table into ``out_dir``."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    files = {"collisions": "collisions.csv", "summary": "summary.json"}
-    precision = result.precision
-    table = result.collision_table(native=True)
-    atomic_write_text(out_dir / "collisions.csv", collisions_csv(table, precision.digits, precision.format))
+    cls = TABLE_SINKS[table_format]
+    return cls(out_dir / f"collisions.{cls.format}")
+
+
+def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, figures: bool = True, sink=None) -> dict:
+    """Write the table (unless ``sink`` streamed it), summary.json and the figures into ``out_dir``."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if sink is None:
+        sink = table_sink(out_dir, "csv")
+        sink.open(result.scene, result.pairs, result.precision)
+        sink.write((result.times, result.pair_numbers, result.states_before, result.states_after), 1)
+        sink.close()
+    files = {"collisions": Path(sink.path).name, "summary": "summary.json"}
     if figures:
         from .figures import energy_figure, phase_portrait_figure
 
@@ -80,5 +179,7 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
         energy_figure(result, out_dir / "energy.png")
         files.update(phase_portrait="phase_portrait.png", energy="energy.png")
     summary = summary_dict(result, scene_source=scene_source, files=files)
+    summary["table_format"] = sink.format
+    summary["table_rows"] = sink.rows
     atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2, allow_nan=True) + "\n")
     return summary

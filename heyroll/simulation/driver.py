@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 import time
+from typing import Protocol
 
 import heyoka as hy
 import numpy as np
@@ -28,6 +29,9 @@ def simulate(
     tolerance=None,
     high_accuracy: bool = False,
     watch_all_contacts: bool = False,
+    sink: CollisionSink | None = None,
+    chunk_size: int = 65536,
+    progress=None,
 ) -> SimulationResult:
     """Integrate ``scene`` and apply its collision law at every contact.
 
@@ -40,6 +44,12 @@ def simulate(
     heyoka's compensated summation: it slows double runs by about a fifth and
     matters for very long runs (see validation/), not for collision times over
     tens of collisions, which stay within a few ulp either way.
+
+    Long runs: with a ``sink`` (see :class:`CollisionSink`) the records are
+    handed on every ``chunk_size`` collisions and only the first chunk stays
+    in memory, so memory does not grow with the number of collisions.
+    ``progress(t, collisions)``, if given, is called about every 0.2 s of
+    wall time (checked once per 1024 collisions) and at the end.
     """
     started = time.perf_counter()
     precision = Precision.parse(precision) if isinstance(precision, str) else precision
@@ -59,6 +69,12 @@ def simulate(
     )
     holder[0] = ta.state
     initial_state = np.array(ta.state, copy=True)
+    stream = _Stream(log, system, sink, progress, ta)
+    if sink is not None:
+        sink.open(scene, system.pairs, precision)
+    if sink is not None or progress is not None:
+        log.chunk_size = chunk_size if sink is not None else 1024
+        log.on_full = stream.on_full
 
     steps = 0
     outcome = None
@@ -73,10 +89,14 @@ def simulate(
             gc.disable()
             try:
                 result = ta.propagate_until(precision.number(t_end))
+                outcome, steps = result[0], int(result[3])
+            except KeyboardInterrupt:
+                # Ctrl-C (or SIGTERM turned into it by the CLI): keep every completed collision.
+                log.stop.reason = "interrupted"
+                log.stop.message = f"interrupted at t = {float(ta.time):.17g} s after {log.count} collisions"
             finally:
                 if gc_was_enabled:
                     gc.enable()
-            outcome, steps = result[0], int(result[3])
 
     status, message = _status(log, outcome, t_end)
     final_state = np.array(ta.state, copy=True)
@@ -84,22 +104,15 @@ def simulate(
         overlap = _overlap(scene, precision, final_state)
         if overlap:
             status, message = Status.OVERLAP, overlap
-    records = log.records
-    n = len(records)
-    nb = len(scene.bodies)
-    before = np.array([r[2] for r in records]).reshape(n, 2 * nb) if n else np.zeros((0, 2 * nb))
-    after = before.copy()
-    if n:
-        numbers = np.array([r[1] for r in records], dtype=np.int64)
-        vi_index = nb + np.array([system.pairs[k].i for k in numbers])
-        vj_index = nb + np.array([system.pairs[k].j for k in numbers])
-        rows = np.arange(n)
-        after[rows, vi_index] = [r[3] for r in records]
-        after[rows, vj_index] = [r[4] for r in records]
-        times = np.array([r[0] for r in records])
+    total = log.count
+    if sink is not None:
+        stream.flush()
+        sink.close()
+        times, numbers, before, after = stream.kept or records_to_arrays([], system)
     else:
-        numbers = np.zeros(0, dtype=np.int64)
-        times = np.zeros(0)
+        times, numbers, before, after = records_to_arrays(log.records, system)
+    if progress is not None:
+        progress(float(ta.time), total)
     return SimulationResult(
         scene=scene,
         status=status,
@@ -113,6 +126,8 @@ def simulate(
         pairs=system.pairs,
         states_before=before,
         states_after=after,
+        total_collisions=total,
+        table_file=getattr(sink, "path", None) if sink is not None else None,
         wall_time_s=time.perf_counter() - started,
         steps=steps,
         settings={
@@ -122,6 +137,66 @@ def simulate(
             "max_collisions": limit,
         },
     )
+
+
+class CollisionSink(Protocol):
+    """Where a streamed run sends its collision records, chunk by chunk."""
+
+    def open(self, scene: Scene, pairs: tuple, precision: Precision) -> None:
+        """Called once before the run, with the contacts it watches."""
+
+    def write(self, chunk: tuple, first_number: int) -> None:
+        """``chunk`` = (times, pair_numbers, states_before, states_after) arrays."""
+
+    def close(self) -> None:
+        """Called once at the end of the run (also after an interruption)."""
+
+
+def records_to_arrays(records: list, system) -> tuple:
+    """Raw callback records -> (times, pair_numbers, states_before, states_after)."""
+    n = len(records)
+    nb = system.n_bodies
+    if not n:
+        return np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((0, 2 * nb)), np.zeros((0, 2 * nb))
+    before = np.array([r[2] for r in records]).reshape(n, 2 * nb)
+    after = before.copy()
+    numbers = np.array([r[1] for r in records], dtype=np.int64)
+    vi_index = nb + np.array([system.pairs[k].i for k in numbers])
+    vj_index = nb + np.array([system.pairs[k].j for k in numbers])
+    rows = np.arange(n)
+    after[rows, vi_index] = [r[3] for r in records]
+    after[rows, vj_index] = [r[4] for r in records]
+    times = np.array([r[0] for r in records])
+    return times, numbers, before, after
+
+
+class _Stream:
+    """Hands collision records on to a sink in chunks and reports progress."""
+
+    def __init__(self, log, system, sink, progress, ta):
+        self.log, self.system, self.sink, self.progress, self.ta = log, system, sink, progress, ta
+        self.kept: tuple | None = None  # the first chunk stays in memory for figures
+        self.last_report = time.perf_counter()
+
+    def flush(self) -> None:
+        log = self.log
+        if self.sink is None or not log.records:
+            return
+        chunk = records_to_arrays(log.records, self.system)
+        self.sink.write(chunk, first_number=log.flushed + 1)
+        if self.kept is None:
+            self.kept = chunk
+        log.flushed += len(log.records)
+        log.records.clear()
+
+    def on_full(self) -> None:
+        if self.sink is not None:
+            self.flush()
+        else:  # progress only: keep every record, look again 1024 collisions later
+            self.log.chunk_size += 1024
+        if self.progress is not None and time.perf_counter() - self.last_report > 0.2:
+            self.last_report = time.perf_counter()
+            self.progress(float(self.ta.time), self.log.count)
 
 
 def _collide_touching_pairs(system, events, ta, holder) -> None:
@@ -147,6 +222,8 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
         return Status.CONTACT, log.stop.message
     if log.stop.reason == "inconsistent":
         return Status.INCONSISTENT, log.stop.message
+    if log.stop.reason == "interrupted":
+        return Status.INTERRUPTED, log.stop.message
     if outcome == hy.taylor_outcome.time_limit:
         return Status.COMPLETED, f"reached t_end = {float(t_end):.17g} s after {len(log.records)} collisions"
     return Status.FAILED, f"the integrator stopped with outcome {outcome!s}"

@@ -33,11 +33,23 @@ class StopRequest:
 
 @dataclass
 class CollisionLog:
-    """Raw collision records appended by the event callbacks."""
+    """Raw collision records appended by the event callbacks.
+
+    When ``chunk_size`` records have piled up the callback calls ``on_full``,
+    which hands them on (to a file) and clears the list, so memory stays flat
+    however long the run; ``flushed`` counts the records handed on.
+    """
 
     records: list = field(default_factory=list)
     max_collisions: int | None = None
     stop: StopRequest = field(default_factory=StopRequest)
+    flushed: int = 0
+    chunk_size: int = 1 << 62
+    on_full: object = None
+
+    @property
+    def count(self) -> int:
+        return self.flushed + len(self.records)
 
 
 def collision_events(system: SceneSystem, log: CollisionLog, state_view_holder: list) -> list:
@@ -143,7 +155,7 @@ def _make_callback(system: SceneSystem, number: int, log: CollisionLog, holder: 
         # The gap opens at rate vj_new - vi_new; it closed at vi - vj.
         opening = vj_new - vi_new
         if opening <= tiny * (vi - vj):
-            where = f"collision {len(records)} at t = {float(ta.time):.17g}: bodies {pair.i + 1} and {pair.j + 1}"
+            where = f"collision {log.count} at t = {float(ta.time):.17g}: bodies {pair.i + 1} and {pair.j + 1}"
             if opening < -tiny * (vi - vj):
                 stop.reason = "inconsistent"
                 stop.message = (
@@ -157,10 +169,12 @@ def _make_callback(system: SceneSystem, number: int, log: CollisionLog, holder: 
                     "persistent contact is not modelled yet"
                 )
             return False
-        if limit is not None and len(records) >= limit:
+        if limit is not None and log.flushed + len(records) >= limit:
             stop.reason = "max_collisions"
             stop.message = f"stopped after max_collisions = {limit} collisions"
             return False
+        if len(records) >= log.chunk_size:
+            log.on_full()
         return True
 
     on_collision.pair = pair

@@ -20,6 +20,7 @@ class Status(str, Enum):
     MAX_COLLISIONS = "max_collisions"
     CONTACT = "contact"
     INCONSISTENT = "inconsistent_collision"
+    INTERRUPTED = "interrupted"
     OVERLAP = "overlap"
     FAILED = "failed"
 
@@ -70,6 +71,63 @@ def body_energies(constants: BodyConstants, states: np.ndarray) -> np.ndarray:
     return mechanical_energy(constants.generalized_mass, constants.weight_moment, states[:, :n], states[:, n:], np.sin)
 
 
+def build_collision_table(
+    scene: Scene, pairs, precision: Precision, times, pair_numbers, states_before, states_after,
+    *, first_number: int = 1, native: bool = False,
+) -> np.ndarray:
+    """The collision table (columns TABLE_COLUMNS) of raw collision records.
+
+    ``states_before[n]`` / ``states_after[n]`` are full states
+    [phi_1..phi_N, dphi_1..dphi_N]; ``pair_numbers[n]`` indexes ``pairs``;
+    rows are numbered from ``first_number``.
+    """
+    native = native and precision.name != "double"
+    number = precision.number if native else float
+    as_array = np.asarray if native else (lambda x: np.asarray(x, dtype=float))
+    n = len(times)
+    float_type = object if native else np.float64
+    dtype = [(c, np.int64 if c in INTEGER_COLUMNS else float_type) for c in TABLE_COLUMNS]
+    table = np.zeros(n, dtype=dtype)
+    if n == 0:
+        return table
+    nb = len(scene.bodies)
+    before, after = as_array(states_before), as_array(states_after)
+    i = np.array([p.i for p in pairs], dtype=np.int64)[pair_numbers]
+    j = np.array([p.j for p in pairs], dtype=np.int64)[pair_numbers]
+    rows = np.arange(n)
+    c = body_constants(scene, number)
+    table["n"] = rows + first_number
+    table["t"] = as_array(times)
+    table["i"], table["j"] = i + 1, j + 1
+    table["phi_i"], table["phi_j"] = before[rows, i], before[rows, j]
+    for side, idx in (("i", i), ("j", j)):
+        table[f"dphi_{side}_before"] = before[rows, nb + idx]
+        table[f"dphi_{side}_after"] = after[rows, nb + idx]
+        table[f"omega_{side}_before"] = c.rolling_ratio[idx] * before[rows, nb + idx]
+        table[f"omega_{side}_after"] = c.rolling_ratio[idx] * after[rows, nb + idx]
+    table["energy_before"] = body_energies(c, before).sum(axis=1)
+    table["energy_after"] = body_energies(c, after).sum(axis=1)
+    impulse, change = _law_quantities(scene, i, j, before[rows, nb + i], before[rows, nb + j], number)
+    table["law_impulse"], table["law_energy_change"] = impulse, change
+    return table
+
+
+def _law_quantities(scene: Scene, i, j, dphi_i, dphi_j, number=float):
+    """Moment of the collision impulse (eq. 12) and kinetic-energy change (eq. 15)."""
+    law, tr, bodies = scene.law, scene.track, scene.bodies
+    k = number(law.restitution)
+    impulse = np.empty(i.size, dtype=dphi_i.dtype)
+    change = np.empty(i.size, dtype=dphi_i.dtype)
+    for pair in {(a, b) for a, b in zip(i.tolist(), j.tolist())}:
+        mask = (i == pair[0]) & (j == pair[1])
+        vi, vj = law.variables(tr, bodies[pair[0]]), law.variables(tr, bodies[pair[1]])
+        mi, mj = number(vi.inertia), number(vj.inertia)
+        du = number(vi.scale) * dphi_i[mask] - number(vj.scale) * dphi_j[mask]
+        impulse[mask] = collision_impulse(mi, mj, k, du)
+        change[mask] = kinetic_energy_change(mi, mj, k, du)
+    return impulse, change
+
+
 @dataclass(frozen=True)
 class SimulationResult:
     """What :func:`heyroll.simulate` returns.
@@ -95,6 +153,10 @@ class SimulationResult:
     wall_time_s: float
     steps: int = 0
     settings: dict = field(default_factory=dict)
+    #: Collisions in the whole run; None: all are in memory (times.size).
+    total_collisions: int | None = None
+    #: Where the full table was streamed to (None: not streamed).
+    table_file: str | None = None
 
     @property
     def success(self) -> bool:
@@ -102,6 +164,12 @@ class SimulationResult:
 
     @property
     def n_collisions(self) -> int:
+        """Collisions in the whole run (streamed ones included)."""
+        return int(self.times.size) if self.total_collisions is None else self.total_collisions
+
+    @property
+    def kept_collisions(self) -> int:
+        """Collisions whose records are in memory (all, unless the table was streamed)."""
         return int(self.times.size)
 
     @property
@@ -123,56 +191,18 @@ class SimulationResult:
         return self.energy(self.final_state)
 
     def collision_table(self, native: bool = False) -> np.ndarray:
-        """One row per collision as a numpy structured array (columns TABLE_COLUMNS).
+        """One row per collision kept in memory, as a numpy structured array.
 
-        By default every float column is float64. With ``native=True`` a quad or
-        MPFR run keeps its own number type (object columns holding heyoka
-        real128 / real values), so its table can be written in full digits.
+        Columns TABLE_COLUMNS. Every float column is float64 by default; with
+        ``native=True`` a quad or MPFR run keeps its own number type (object
+        columns of heyoka real128 / real), so its table can be written in full
+        digits. A run streamed to a file keeps only its first collisions here
+        (``kept_collisions``); the file has them all.
         """
-        native = native and self.precision.name != "double"
-        number = self.precision.number if native else float
-        as_array = np.asarray if native else (lambda x: np.asarray(x, dtype=float))
-        n = self.n_collisions
-        float_type = object if native else np.float64
-        dtype = [(c, np.int64 if c in INTEGER_COLUMNS else float_type) for c in TABLE_COLUMNS]
-        table = np.zeros(n, dtype=dtype)
-        if n == 0:
-            return table
-        nb = self.n_bodies
-        before, after = as_array(self.states_before), as_array(self.states_after)
-        i = np.array([p.i for p in self.pairs], dtype=np.int64)[self.pair_numbers]
-        j = np.array([p.j for p in self.pairs], dtype=np.int64)[self.pair_numbers]
-        rows = np.arange(n)
-        c = body_constants(self.scene, number)
-        table["n"] = rows + 1
-        table["t"] = as_array(self.times)
-        table["i"], table["j"] = i + 1, j + 1
-        table["phi_i"], table["phi_j"] = before[rows, i], before[rows, j]
-        for side, idx in (("i", i), ("j", j)):
-            table[f"dphi_{side}_before"] = before[rows, nb + idx]
-            table[f"dphi_{side}_after"] = after[rows, nb + idx]
-            table[f"omega_{side}_before"] = c.rolling_ratio[idx] * before[rows, nb + idx]
-            table[f"omega_{side}_after"] = c.rolling_ratio[idx] * after[rows, nb + idx]
-        table["energy_before"] = body_energies(c, before).sum(axis=1)
-        table["energy_after"] = body_energies(c, after).sum(axis=1)
-        impulse, change = self._law_quantities(i, j, before[rows, nb + i], before[rows, nb + j], number)
-        table["law_impulse"], table["law_energy_change"] = impulse, change
-        return table
-
-    def _law_quantities(self, i, j, dphi_i, dphi_j, number=float):
-        """Moment of the collision impulse (eq. 12) and kinetic-energy change (eq. 15)."""
-        law, tr, bodies = self.scene.law, self.scene.track, self.scene.bodies
-        k = number(law.restitution)
-        impulse = np.empty(i.size, dtype=dphi_i.dtype)
-        change = np.empty(i.size, dtype=dphi_i.dtype)
-        for pair in {(a, b) for a, b in zip(i.tolist(), j.tolist())}:
-            mask = (i == pair[0]) & (j == pair[1])
-            vi, vj = law.variables(tr, bodies[pair[0]]), law.variables(tr, bodies[pair[1]])
-            mi, mj = number(vi.inertia), number(vj.inertia)
-            du = number(vi.scale) * dphi_i[mask] - number(vj.scale) * dphi_j[mask]
-            impulse[mask] = collision_impulse(mi, mj, k, du)
-            change[mask] = kinetic_energy_change(mi, mj, k, du)
-        return impulse, change
+        return build_collision_table(
+            self.scene, self.pairs, self.precision, self.times, self.pair_numbers,
+            self.states_before, self.states_after, native=native,
+        )
 
     def summary(self) -> dict:
         """The run in a JSON-ready dictionary (see README, "Outputs")."""
