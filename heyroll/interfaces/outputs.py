@@ -79,9 +79,9 @@ class _TableFile:
         self._start()
 
     def write(self, chunk: tuple, first_number: int) -> None:
-        times, numbers, before, after = chunk
+        times, numbers, before, after, flags = chunk
         table = build_collision_table(
-            self.scene, self.pairs, self.precision, times, numbers, before, after,
+            self.scene, self.pairs, self.precision, times, numbers, before, after, flags,
             first_number=first_number, native=True,
         )
         self._append(table)
@@ -128,7 +128,7 @@ class NpyTableSink(_TableFile):
         super().open(scene, pairs, precision)
 
     def _header(self, rows: int) -> bytes:
-        dtype = build_collision_table(self.scene, (), self.precision, [], [], [], []).dtype
+        dtype = build_collision_table(self.scene, (), self.precision, [], [], [], [], []).dtype
         d = {"descr": np.lib.format.dtype_to_descr(dtype), "fortran_order": False, "shape": (rows,)}
         text = repr(d).encode("latin1")
         text += b" " * (self.HEADER_BYTES - 10 - len(text) - 1) + b"\n"
@@ -169,7 +169,7 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
     if sink is None:
         sink = table_sink(out_dir, "csv")
         sink.open(result.scene, result.pairs, result.precision)
-        sink.write((result.times, result.pair_numbers, result.states_before, result.states_after), 1)
+        sink.write((result.times, result.pair_numbers, result.states_before, result.states_after, result.law_flags), 1)
         sink.close()
     files = {"collisions": Path(sink.path).name, "summary": "summary.json"}
     if figures:

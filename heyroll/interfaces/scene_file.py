@@ -20,10 +20,10 @@ from ..model.scene import STANDARD_GRAVITY, RunSettings, Scene
 from ..model.tracks import CircleTrack
 
 TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run"}
-TRACK_KEYS = {"type", "radius"}
+TRACK_KEYS = {"type", "radius", "friction", "sides"}
 TRACK_TYPES = ("circle",)
 BODY_KEYS = {"shape", "kappa", "radius", "mass", "density", "phi", "dphi", "omega"}
-COLLISION_KEYS = {"law", "restitution"}
+COLLISION_KEYS = {"law", "restitution", "on_inconsistent"}
 RUN_KEYS = {"t_end", "max_collisions"}
 
 
@@ -63,7 +63,12 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
     if not isinstance(name, str):
         raise SceneError("name", "must be a string")
     g = _number(data, "g", "", default=STANDARD_GRAVITY)
-    track = _track(_table(data, "track", required=True))
+    track_table = _table(data, "track", required=True)
+    track = _track(track_table)
+    friction = _number(track_table, "friction", "track")
+    sides = track_table.get("sides", "two")
+    if not isinstance(sides, str):
+        raise SceneError("track.sides", "must be a string: one | two")
     bodies_data = data.get("bodies")
     if bodies_data is None:
         raise SceneError("bodies", "missing: give at least one [[bodies]] table")
@@ -83,11 +88,17 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
     if not isinstance(law_name, str):
         raise SceneError("collision.law", "must be a string")
     law = make_law(law_name, _number(collision, "restitution", "collision", default="1"))
+    policy = collision.get("on_inconsistent", "newton")
+    if not isinstance(policy, str):
+        raise SceneError("collision.on_inconsistent", "must be a string: newton | error")
     run = _table(data, "run", required=False)
     _no_unknown(run, RUN_KEYS, "run")
     max_collisions = run.get("max_collisions")
     settings = RunSettings.make(_number(run, "t_end", "run", default="100"), max_collisions)
-    return Scene.make(track=track, bodies=bodies, phi=phis, dphi=dphis, law=law, g=g, run=settings, name=name)
+    return Scene.make(
+        track=track, bodies=bodies, phi=phis, dphi=dphis, law=law, g=g, run=settings, name=name,
+        friction=friction, on_inconsistent=policy, track_sides=sides,
+    )
 
 
 def _track(table: dict) -> CircleTrack:

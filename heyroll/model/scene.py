@@ -21,6 +21,11 @@ from .tracks import CircleTrack, mechanical_energy
 
 STANDARD_GRAVITY = "9.81"
 
+#: Policies for a collision whose law outcome leaves the bodies approaching in
+#: position (they would overlap): fall back to Newton's law on the gap rate
+#: with generalized masses for that collision, or stop the run.
+INCONSISTENCY_POLICIES = ("newton", "error")
+
 
 @dataclass(frozen=True)
 class RunSettings:
@@ -81,6 +86,14 @@ class Scene:
     law: CollisionLaw
     run: RunSettings
     name: str = "scene"
+    #: Coefficient of friction between the bodies and the track (None: rolling never slips).
+    track_friction: mpmath.mpf | None = None
+    #: What to do when the law's outcome leaves two bodies approaching: "newton" or "error".
+    on_inconsistent: str = "newton"
+    #: "two": the track guides the bodies on both sides (rolling elements between two
+    #: races; eq. 25 holds whatever the normal force); "one": bodies rest on the inside
+    #: of the circle and a run stops when one would leave it (normal force 0).
+    track_sides: str = "two"
     pairs: tuple[ContactPair, ...] = field(default=(), compare=False)
 
     @classmethod
@@ -95,6 +108,9 @@ class Scene:
         g: Real = STANDARD_GRAVITY,
         run: RunSettings | None = None,
         name: str = "scene",
+        friction: Real | None = None,
+        on_inconsistent: str = "newton",
+        track_sides: str = "two",
     ) -> "Scene":
         bodies = tuple(bodies)
         if not bodies:
@@ -111,6 +127,18 @@ class Scene:
         phis = tuple(_finite(p, f"bodies[{n}].phi") for n, p in enumerate(phi, start=1))
         dphis = tuple(_finite(v, f"bodies[{n}].dphi") for n, v in enumerate(dphi, start=1))
         law = law if law is not None else HedrihRollingLaw()
+        mu = None
+        if friction is not None:
+            if not is_finite(friction) or to_mpf(friction) < 0:
+                raise SceneError("track.friction", f"must be a finite number >= 0, got {friction!r}")
+            mu = to_mpf(friction)
+        if on_inconsistent not in INCONSISTENCY_POLICIES:
+            raise SceneError(
+                "collision.on_inconsistent",
+                f"unknown policy {on_inconsistent!r}; expected one of {' | '.join(INCONSISTENCY_POLICIES)}",
+            )
+        if track_sides not in ("one", "two"):
+            raise SceneError("track.sides", f"must be 'one' or 'two', got {track_sides!r}")
         scene = cls(
             g=gv,
             track=track,
@@ -120,6 +148,9 @@ class Scene:
             law=law,
             run=run or RunSettings.make(),
             name=name,
+            track_friction=mu,
+            on_inconsistent=on_inconsistent,
+            track_sides=track_sides,
         )
         object.__setattr__(scene, "pairs", scene._contact_pairs())
         return scene

@@ -1,23 +1,56 @@
-"""The driver: integrate a scene with heyoka, stop at t_end or max_collisions."""
+"""The driver: integrate a scene with heyoka, mode by mode, until t_end.
+
+A *mode* says which bodies move together in persistent contact. Most runs
+stay in the all-free mode for good; an accumulating sequence of collisions
+(Zeno) switches a pair into contact, a contact force that would pull splits
+it again. Each mode is one heyoka integrator (compiled code is cached per
+mode shape); collisions inside a mode are handled by event callbacks without
+leaving heyoka.
+"""
 
 from __future__ import annotations
 
 import gc
+import math
 import time
+from dataclasses import dataclass
 from typing import Protocol
 
 import heyoka as hy
+import mpmath
 import numpy as np
 
 from ..model.scene import Scene
-from .events import CollisionLog, collision_events
+from .events import CollisionLog, StopRequest, mode_events, track_warnings
 from .precision import DOUBLE, Precision
 from .result import SimulationResult, Status
-from .system import build_system, gap_value
+from .system import SceneSystem, Unit, build_system, cluster_unit, gap_value, singleton_units, unit_acceleration
 
 #: A gap below -OVERLAP_TOLERANCE rad at the end of a run means a collision
 #: was missed; the run is then reported as failed, never as a success.
 OVERLAP_TOLERANCE = 1e-9
+
+
+class CollisionSink(Protocol):
+    """Where a streamed run sends its collision records, chunk by chunk."""
+
+    def open(self, scene: Scene, pairs: tuple, precision: Precision) -> None:
+        """Called once before the run, with the scene's contact pairs."""
+
+    def write(self, chunk: tuple, first_number: int) -> None:
+        """``chunk`` = (times, pair_numbers, states_before, states_after, flags) arrays."""
+
+    def close(self) -> None:
+        """Called once at the end of the run (also after an interruption)."""
+
+
+@dataclass(frozen=True)
+class ModeChange:
+    """From time ``t`` on, bodies move in ``clusters`` (1-based body numbers); ``state`` is the full state then."""
+
+    t: float
+    clusters: tuple[tuple[int, ...], ...]
+    state: tuple
 
 
 def simulate(
@@ -57,132 +90,277 @@ def simulate(
     limit = scene.run.max_collisions if max_collisions is ... else max_collisions
     if limit is not None and limit < 0:
         raise ValueError("max_collisions must be >= 0")
-    system = build_system(scene, precision, pairs=scene.pairs if watch_all_contacts else None)
-    log = CollisionLog(max_collisions=limit)
-    holder: list = [None]
-    events = collision_events(system, log, holder)
+    pairs = scene.pairs if watch_all_contacts else None
     options = dict(precision.integrator_options(), high_accuracy=high_accuracy)
     if tolerance is not None:
         options["tol"] = precision.number(tolerance)
-    ta = hy.taylor_adaptive(
-        system.equations, system.initial_state, pars=system.parameters, t_events=events, **options
-    )
-    holder[0] = ta.state
-    initial_state = np.array(ta.state, copy=True)
-    stream = _Stream(log, system, sink, progress, ta)
-    if sink is not None:
-        sink.open(scene, system.pairs, precision)
-    if sink is not None or progress is not None:
-        log.chunk_size = chunk_size if sink is not None else 1024
-        log.on_full = stream.on_full
+    time_scale = 1 / math.sqrt(max(float(scene.track.angular_stiffness(b, scene.g)) for b in scene.bodies))
 
-    steps = 0
-    outcome = None
+    log = CollisionLog(max_collisions=limit)
+    stream = _Stream(log, sink, progress, len(scene.bodies))
+    if sink is not None:
+        sink.open(scene, scene.pairs, precision)
+        log.chunk_size = chunk_size
+    elif progress is not None:
+        log.chunk_size = 1024
+    log.on_full = stream.on_full
+
+    num = precision.number
+    full_state = [num(x) for x in scene.phi] + [num(x) for x in scene.dphi]
+    initial_state = np.array(full_state)
+    units = singleton_units(len(scene.bodies))
+    units, full_state = _initial_contacts(scene, precision, pairs, units, full_state)
+    modes = [ModeChange(0.0, _clusters(units), tuple(full_state))]
+    t = (num(0), num(0))  # double-length time (hi, lo), kept across modes
+    steps, outcome, first = 0, None, True
+    contacts_open: dict[int, float] = {}
+    intervals: list[dict] = []
+    for unit in units:
+        for a, b in zip(unit.members, unit.members[1:]):
+            contacts_open[(a, b)] = 0.0
+
     if limit == 0:
         log.stop.reason, log.stop.message = "max_collisions", "max_collisions = 0: nothing integrated"
-    else:
-        _collide_touching_pairs(system, events, ta, holder)
+    while limit != 0:
+        system = build_system(scene, precision, pairs=pairs, units=units)
+        holder: list = [None]
+        events = mode_events(scene, system, log, holder, time_scale)
+        warnings = track_warnings(system, log)
+        ta = hy.taylor_adaptive(
+            system.equations, system.reduce(full_state), pars=system.parameters, t_events=events,
+            nt_events=warnings, **options
+        )
+        ta.dtime = t
+        holder[0] = ta.state
+        stream.ta = ta
+        _reset(log.stop)
+        if first:
+            _collide_touching_pairs(system, events, ta, holder)
+            first = False
         if log.stop.reason is None:
-            # The log grows by one small list per collision: the cyclic garbage
-            # collector would rescan it again and again, for nothing (no cycles).
-            gc_was_enabled = gc.isenabled()
-            gc.disable()
-            try:
-                result = ta.propagate_until(precision.number(t_end))
-                outcome, steps = result[0], int(result[3])
-            except KeyboardInterrupt:
-                # Ctrl-C (or SIGTERM turned into it by the CLI): keep every completed collision.
-                log.stop.reason = "interrupted"
-                log.stop.message = f"interrupted at t = {float(ta.time):.17g} s after {log.count} collisions"
-            finally:
-                if gc_was_enabled:
-                    gc.enable()
+            outcome, n_steps = _propagate(ta, log, precision.number(t_end))
+            steps += n_steps
+        full_state = system.expand(ta.state.tolist())
+        t = ta.dtime
+        reason = log.stop.reason
+        if reason == "merge":
+            contact = system.contacts[log.stop.data["contact"]]
+            units, full_state = _merge(scene, system, units, contact, full_state)
+            contacts_open[(contact.pair.i, contact.pair.j)] = float(t[0])
+        elif reason == "split":
+            link = system.links[log.stop.data["link"]]
+            units = _split(scene, units, link)
+            i, j = _link_bodies(system, link)
+            intervals.append({"i": i + 1, "j": j + 1, "t_start": contacts_open.pop((i, j)), "t_end": float(t[0])})
+        else:
+            break
+        modes.append(ModeChange(float(t[0]), _clusters(units), tuple(full_state)))
 
+    t_final = t[0] + t[1] if precision.name != "double" else float(t[0]) + float(t[1])
+    for (i, j), t_start in contacts_open.items():
+        intervals.append({"i": i + 1, "j": j + 1, "t_start": t_start, "t_end": float(t_final), "open": True})
+    intervals.sort(key=lambda d: (d["t_start"], d["i"]))
     status, message = _status(log, outcome, t_end)
-    final_state = np.array(ta.state, copy=True)
+    final_state = np.array(full_state)
     if status.success:
         overlap = _overlap(scene, precision, final_state)
         if overlap:
             status, message = Status.OVERLAP, overlap
+    if log.fallbacks and status.success:
+        message += (
+            f"; {log.fallbacks} collisions left the bodies approaching under the '{scene.law.name}' law and were "
+            "resolved by Newton's law on the gap rate (law_flag = 1)"
+        )
     total = log.count
     if sink is not None:
         stream.flush()
         sink.close()
-        times, numbers, before, after = stream.kept or records_to_arrays([], system)
+        kept = stream.kept or records_to_arrays([], len(scene.bodies))
     else:
-        times, numbers, before, after = records_to_arrays(log.records, system)
+        kept = records_to_arrays(log.records, len(scene.bodies))
     if progress is not None:
-        progress(float(ta.time), total)
+        progress(float(t_final), total)
+    times, numbers, before, after, flags = kept
     return SimulationResult(
         scene=scene,
         status=status,
         message=message,
         precision=precision,
-        t_final=ta.time,
+        t_final=t_final,
         initial_state=initial_state,
         final_state=final_state,
         times=times,
         pair_numbers=numbers,
-        pairs=system.pairs,
+        pairs=scene.pairs,
         states_before=before,
         states_after=after,
-        total_collisions=total,
-        table_file=getattr(sink, "path", None) if sink is not None else None,
+        law_flags=flags,
         wall_time_s=time.perf_counter() - started,
         steps=steps,
         settings={
-            "tolerance": float(ta.tol),
+            "tolerance": float(ta.tol) if limit != 0 else float(precision.epsilon),
             "high_accuracy": high_accuracy,
             "t_end": float(t_end),
             "max_collisions": limit,
+            "on_inconsistent": scene.on_inconsistent,
+            "inconsistent_collisions": log.fallbacks,
+            "track_sides": scene.track_sides,
+            "warnings": [log.warnings[k] for k in sorted(log.warnings)],
         },
+        total_collisions=total,
+        table_file=getattr(sink, "path", None) if sink is not None else None,
+        contact_intervals=tuple(intervals),
+        mode_changes=tuple(modes),
     )
 
 
-class CollisionSink(Protocol):
-    """Where a streamed run sends its collision records, chunk by chunk."""
+def _propagate(ta, log, t_end):
+    """propagate_until with the cyclic GC off and Ctrl-C turned into a clean stop."""
+    # The log grows by one small list per collision: the cyclic garbage
+    # collector would rescan it again and again, for nothing (no cycles).
+    gc_was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        result = ta.propagate_until(t_end)
+        return result[0], int(result[3])
+    except KeyboardInterrupt:
+        # Ctrl-C (or SIGTERM turned into it by the CLI): keep every completed collision.
+        log.stop.reason = "interrupted"
+        log.stop.message = f"interrupted at t = {float(ta.time):.17g} s after {log.count} collisions"
+        return None, 0
+    finally:
+        if gc_was_enabled:
+            gc.enable()
 
-    def open(self, scene: Scene, pairs: tuple, precision: Precision) -> None:
-        """Called once before the run, with the contacts it watches."""
 
-    def write(self, chunk: tuple, first_number: int) -> None:
-        """``chunk`` = (times, pair_numbers, states_before, states_after) arrays."""
-
-    def close(self) -> None:
-        """Called once at the end of the run (also after an interruption)."""
+def _reset(stop: StopRequest) -> None:
+    stop.reason, stop.message, stop.data = None, "", {}
 
 
-def records_to_arrays(records: list, system) -> tuple:
-    """Raw callback records -> (times, pair_numbers, states_before, states_after)."""
-    n = len(records)
-    nb = system.n_bodies
+def _clusters(units) -> tuple:
+    return tuple(tuple(k + 1 for k in u.members) for u in units if u.is_cluster)
+
+
+def _link_bodies(system: SceneSystem, link) -> tuple[int, int]:
+    members = system.units[link.unit].members
+    return members[link.position], members[link.position + 1]
+
+
+def _merge(scene, system, units, contact, full_state):
+    """Units a and b become one cluster; their rates become the common rate (plastic).
+
+    The generalized momentum sum G psi' is kept; what the remaining bounces
+    would have dissipated (below the run's resolution) is dissipated here.
+    """
+    a, b = contact.unit_a, contact.unit_b
+    nb = len(scene.bodies)
+    members = units[a].members + units[b].members
+    G = system.gen_mass
+    momentum = sum(G[k] * full_state[nb + k] for k in members)
+    rate = momentum / sum(G[k] for k in members)
+    merged = cluster_unit(scene, members)
+    first = full_state[members[0]]
+    for k, o in zip(members, merged.offsets):
+        full_state[k] = first + system.precision.number(o)
+        full_state[nb + k] = rate
+    if b == 0:  # across the top: the merged unit comes first, others keep their order
+        new_units = (merged,) + tuple(units[1:a])
+    else:
+        new_units = tuple(units[:a]) + (merged,) + tuple(units[b + 1:])
+    return new_units, full_state
+
+
+def _split(scene, units, link):
+    unit = units[link.unit]
+    m = link.position
+    left, right = unit.members[: m + 1], unit.members[m + 1:]
+    left = cluster_unit(scene, left) if len(left) > 1 else Unit(left, (mpmath.mpf(0),))
+    right = cluster_unit(scene, right) if len(right) > 1 else Unit(right, (mpmath.mpf(0),))
+    return tuple(units[: link.unit]) + (left, right) + tuple(units[link.unit + 1:])
+
+
+def _initial_contacts(scene, precision, pairs, units, full_state):
+    """Bodies that start touching at rest, pressed together, start in contact."""
+    system = build_system(scene, precision, pairs=pairs, units=units)
+    nb = len(scene.bodies)
+    eps = precision.epsilon
+    for number, contact in enumerate(system.contacts):
+        p = contact.pair
+        gap = gap_value(system, number, full_state)
+        rate = full_state[nb + p.j] - full_state[nb + p.i]
+        scale = 1 + abs(full_state[p.i]) + abs(full_state[p.j])
+        if gap <= 4 * eps * scale and abs(rate) <= 4 * eps * (abs(full_state[nb + p.i]) + abs(full_state[nb + p.j]) + 1):
+            acc = unit_acceleration(system, contact.unit_b, full_state[p.j]) - unit_acceleration(system, contact.unit_a, full_state[p.i])
+            if acc < 0:
+                units, full_state = _merge(scene, system, units, contact, full_state)
+                return _initial_contacts(scene, precision, pairs, units, full_state)
+    return units, full_state
+
+
+def _collide_touching_pairs(system, events, ta, holder) -> None:
+    """Bodies that start touching and approaching collide at t = 0.
+
+    An event cannot see a root at the very start of a step, so such a
+    collision is applied here, by the same callback.
+    """
+    state = holder[0].tolist()
+    nu = system.n_units
+    for number, contact in enumerate(system.contacts):
+        gap = gap_value(system, number, state)
+        closing = state[nu + contact.unit_a] - state[nu + contact.unit_b]
+        scale = 1 + abs(state[contact.unit_a]) + abs(state[contact.unit_b])
+        if gap <= 4 * system.precision.epsilon * scale and closing > 0:
+            if not events[number].callback(ta, -1):
+                return
+
+
+def records_to_arrays(records: list, n_bodies: int) -> tuple:
+    """Raw callback records -> (times, pair_numbers, states_before, states_after, flags).
+
+    A record is (t, pair number, full state before, rate_i, rate_j, flag) on the
+    hot path (only bodies i and j change), or (t, pair number, state before,
+    None, full state after, flag) when clusters move.
+    """
+    n, nb = len(records), n_bodies
     if not n:
-        return np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((0, 2 * nb)), np.zeros((0, 2 * nb))
+        empty = np.zeros((0, 2 * nb))
+        return np.zeros(0), np.zeros(0, dtype=np.int64), empty, empty.copy(), np.zeros(0, dtype=np.int64)
+    times = np.array([r[0] for r in records])
+    numbers = np.array([r[1] for r in records], dtype=np.int64)
+    flags = np.array([r[5] for r in records], dtype=np.int64)
     before = np.array([r[2] for r in records]).reshape(n, 2 * nb)
     after = before.copy()
-    numbers = np.array([r[1] for r in records], dtype=np.int64)
-    vi_index = nb + np.array([system.pairs[k].i for k in numbers])
-    vj_index = nb + np.array([system.pairs[k].j for k in numbers])
-    rows = np.arange(n)
-    after[rows, vi_index] = [r[3] for r in records]
-    after[rows, vj_index] = [r[4] for r in records]
-    times = np.array([r[0] for r in records])
-    return times, numbers, before, after
+    fast = np.array([k for k, r in enumerate(records) if r[3] is not None], dtype=np.int64)
+    if fast.size:
+        bodies = pair_bodies(nb)[numbers[fast]]
+        after[fast, nb + bodies[:, 0]] = [records[k][3] for k in fast]
+        after[fast, nb + bodies[:, 1]] = [records[k][4] for k in fast]
+    for k, r in enumerate(records):
+        if r[3] is None:
+            after[k] = r[4]
+    return times, numbers, before, after, flags
+
+
+def pair_bodies(n_bodies: int) -> np.ndarray:
+    """Body indices (i, j) of scene pair number p: (p, p + 1), and (N - 1, 0) for the last."""
+    n = n_bodies
+    return np.array([(p, p + 1) for p in range(n - 1)] + ([(n - 1, 0)] if n > 1 else []), dtype=np.int64).reshape(-1, 2)
 
 
 class _Stream:
     """Hands collision records on to a sink in chunks and reports progress."""
 
-    def __init__(self, log, system, sink, progress, ta):
-        self.log, self.system, self.sink, self.progress, self.ta = log, system, sink, progress, ta
+    def __init__(self, log, sink, progress, n_bodies):
+        self.log, self.sink, self.progress, self.n_bodies = log, sink, progress, n_bodies
         self.kept: tuple | None = None  # the first chunk stays in memory for figures
         self.last_report = time.perf_counter()
+        self.ta = None
 
     def flush(self) -> None:
         log = self.log
         if self.sink is None or not log.records:
             return
-        chunk = records_to_arrays(log.records, self.system)
+        chunk = records_to_arrays(log.records, self.n_bodies)
         self.sink.write(chunk, first_number=log.flushed + 1)
         if self.kept is None:
             self.kept = chunk
@@ -199,43 +377,29 @@ class _Stream:
             self.progress(float(self.ta.time), self.log.count)
 
 
-def _collide_touching_pairs(system, events, ta, holder) -> None:
-    """Bodies that start touching and approaching collide at t = 0.
-
-    An event cannot see a root at the very start of a step, so such a
-    collision is applied here, by the same callback.
-    """
-    state = holder[0]
-    nb = system.n_bodies
-    for number, pair in enumerate(system.pairs):
-        gap = gap_value(system, number, state)
-        closing = state[nb + pair.i] - state[nb + pair.j]
-        if gap <= 4 * system.precision.epsilon * (1 + abs(state[pair.i]) + abs(state[pair.j])) and closing > 0:
-            if not events[number].callback(ta, -1):
-                return
-
-
 def _status(log, outcome, t_end) -> tuple[Status, str]:
-    if log.stop.reason == "max_collisions":
+    reason = log.stop.reason
+    if reason == "max_collisions":
         return Status.MAX_COLLISIONS, log.stop.message
-    if log.stop.reason == "contact":
-        return Status.CONTACT, log.stop.message
-    if log.stop.reason == "inconsistent":
+    if reason == "inconsistent":
         return Status.INCONSISTENT, log.stop.message
-    if log.stop.reason == "interrupted":
+    if reason == "interrupted":
         return Status.INTERRUPTED, log.stop.message
+    if reason in ("left_track", "slip"):
+        return Status(reason), log.stop.message
     if outcome == hy.taylor_outcome.time_limit:
-        return Status.COMPLETED, f"reached t_end = {float(t_end):.17g} s after {len(log.records)} collisions"
+        return Status.COMPLETED, f"reached t_end = {float(t_end):.17g} s after {log.count} collisions"
     return Status.FAILED, f"the integrator stopped with outcome {outcome!s}"
 
 
 def _overlap(scene: Scene, precision: Precision, state) -> str:
     system = build_system(scene, precision, pairs=scene.pairs)
-    for number, pair in enumerate(system.pairs):
-        gap = float(gap_value(system, number, state))
+    for number, contact in enumerate(system.contacts):
+        gap = float(gap_value(system, number, list(state)))
         if gap < -OVERLAP_TOLERANCE:
+            p = contact.pair
             return (
-                f"bodies {pair.i + 1} and {pair.j + 1} overlap at the end of the run (gap {gap:.3g} rad): "
+                f"bodies {p.i + 1} and {p.j + 1} overlap at the end of the run (gap {gap:.3g} rad): "
                 "a collision was missed"
             )
     return ""

@@ -21,6 +21,8 @@ class Status(str, Enum):
     CONTACT = "contact"
     INCONSISTENT = "inconsistent_collision"
     INTERRUPTED = "interrupted"
+    LEFT_TRACK = "left_track"
+    SLIP = "slip"
     OVERLAP = "overlap"
     FAILED = "failed"
 
@@ -35,9 +37,13 @@ TABLE_COLUMNS = (
     "omega_i_before", "omega_j_before", "omega_i_after", "omega_j_after",
     "energy_before", "energy_after",
     "dphi_i_before", "dphi_j_before", "dphi_i_after", "dphi_j_after",
-    "law_impulse", "law_energy_change",
+    "law_impulse", "law_energy_change", "law_flag",
 )
-INTEGER_COLUMNS = ("n", "i", "j")
+INTEGER_COLUMNS = ("n", "i", "j", "law_flag")
+
+#: law_flag values: which law resolved the collision.
+LAW_FLAGS = {0: "the scene's law", 1: "fallback: Newton's law on the gap rate (the scene's law left the bodies approaching)",
+             2: "Newton's law on psi' between units (a cluster in persistent contact took part)"}
 
 
 @dataclass(frozen=True)
@@ -73,7 +79,7 @@ def body_energies(constants: BodyConstants, states: np.ndarray) -> np.ndarray:
 
 def build_collision_table(
     scene: Scene, pairs, precision: Precision, times, pair_numbers, states_before, states_after,
-    *, first_number: int = 1, native: bool = False,
+    flags=None, *, first_number: int = 1, native: bool = False,
 ) -> np.ndarray:
     """The collision table (columns TABLE_COLUMNS) of raw collision records.
 
@@ -109,6 +115,7 @@ def build_collision_table(
     table["energy_after"] = body_energies(c, after).sum(axis=1)
     impulse, change = _law_quantities(scene, i, j, before[rows, nb + i], before[rows, nb + j], number)
     table["law_impulse"], table["law_energy_change"] = impulse, change
+    table["law_flag"] = 0 if flags is None else flags
     return table
 
 
@@ -157,6 +164,12 @@ class SimulationResult:
     total_collisions: int | None = None
     #: Where the full table was streamed to (None: not streamed).
     table_file: str | None = None
+    #: Per kept collision: 0 the scene's law, 1 the fallback law, 2 a cluster collision (LAW_FLAGS).
+    law_flags: np.ndarray | None = None
+    #: Persistent contacts: dicts with i, j (1-based), t_start, t_end (and open: True if still on at the end).
+    contact_intervals: tuple = ()
+    #: Mode changes (ModeChange: t, clusters, full state), the first at t = 0.
+    mode_changes: tuple = ()
 
     @property
     def success(self) -> bool:
@@ -201,7 +214,7 @@ class SimulationResult:
         """
         return build_collision_table(
             self.scene, self.pairs, self.precision, self.times, self.pair_numbers,
-            self.states_before, self.states_after, native=native,
+            self.states_before, self.states_after, self.law_flags, native=native,
         )
 
     def summary(self) -> dict:
@@ -225,6 +238,6 @@ class SimulationResult:
             "t_final_text": self.precision.format(self.t_final),
             "law": self.scene.law.name,
             "restitution": float(self.scene.law.restitution),
-            "watched_contacts": [[p.i + 1, p.j + 1] for p in self.pairs],
+            "contact_intervals": list(self.contact_intervals),
             **self.settings,
         }

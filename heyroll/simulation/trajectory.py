@@ -1,9 +1,9 @@
 """Dense samples of a finished run, for phase portraits and energy plots.
 
-Between two collisions the bodies move independently on their own phase
-curves; each branch is re-integrated from its post-collision state with the
-scene's event-free system (the same compiled code, no events), so a plot
-never needs the run to keep dense output.
+Between two collisions (or mode changes) the units move independently on
+their own phase curves; each piece is re-integrated from its starting state
+with the scene's event-free system of the mode then in force (the same
+compiled code, no events), so a plot never needs the run to keep dense output.
 """
 
 from __future__ import annotations
@@ -14,37 +14,62 @@ import heyoka as hy
 import numpy as np
 
 from .result import SimulationResult
-from .system import build_system
+from .system import Unit, build_system, cluster_unit, singleton_units
 
 
 @dataclass(frozen=True)
 class Branch:
-    """Samples of one interval between collisions: times (k,), states (k, 2N)."""
+    """Samples of one interval between collisions: times (k,), full states (k, 2N)."""
 
     times: np.ndarray
     states: np.ndarray
 
 
-def sample_branches(result: SimulationResult, *, max_branches: int | None = None, points: int = 200) -> list[Branch]:
-    """The run split at its collisions, each piece sampled at ``points`` times.
+def _units(scene, clusters) -> tuple[Unit, ...]:
+    """Units of a mode given its clusters (1-based body numbers)."""
+    in_cluster = {k - 1 for c in clusters for k in c}
+    units = [cluster_unit(scene, tuple(k - 1 for k in c)) for c in clusters]
+    units += [u for u in singleton_units(len(scene.bodies)) if u.members[0] not in in_cluster]
+    return tuple(sorted(units, key=lambda u: u.members[0]))
 
-    Branch 0 runs from t = 0 to the first collision; branch n from collision
-    n to collision n + 1 (or to the end of the run).
+
+def sample_branches(result: SimulationResult, *, max_branches: int | None = None, points: int = 200) -> list[Branch]:
+    """The run split at its collisions and mode changes, each piece sampled at ``points`` times.
+
+    Branch 0 starts at t = 0; every collision and every change of contact
+    mode starts a new branch; the last one ends at the end of the run (or of
+    the collisions kept in memory, for a streamed run).
     """
-    system = build_system(result.scene, result.precision, pairs=())
-    ta = hy.taylor_adaptive(
-        system.equations, system.initial_state, pars=system.parameters, **result.precision.integrator_options()
-    )
-    starts = [0.0] + [float(t) for t in result.times]
-    ends = [float(t) for t in result.times] + [float(result.t_final)]
-    states = [np.asarray(result.initial_state, dtype=float)] + [np.asarray(s, dtype=float) for s in result.states_after]
+    scene = result.scene
+    breaks = [(float(m.t), np.asarray(m.state, dtype=float), m.clusters) for m in result.mode_changes]
+    if not breaks:
+        breaks = [(0.0, np.asarray(result.initial_state, dtype=float), ())]
+    clusters_at = sorted(breaks, key=lambda b: b[0])
+    for t, s in zip(result.times, result.states_after):
+        breaks.append((float(t), np.asarray(s, dtype=float), None))
+    breaks.sort(key=lambda b: b[0])
+    streamed = result.kept_collisions < result.n_collisions
+    t_stop = float(result.times[-1]) if streamed and result.kept_collisions else float(result.t_final)
+    breaks = [b for b in breaks if b[0] <= t_stop]
     if max_branches is not None:
-        starts, ends, states = starts[:max_branches], ends[:max_branches], states[:max_branches]
+        breaks = breaks[:max_branches]
+    integrators: dict = {}
     branches = []
-    for t0, t1, s0 in zip(starts, ends, states):
+    for n, (t0, state, _) in enumerate(breaks):
+        t1 = breaks[n + 1][0] if n + 1 < len(breaks) else t_stop
+        clusters = [c for (tc, _, c) in clusters_at if tc <= t0][-1]
+        if clusters not in integrators:
+            system = build_system(scene, result.precision, units=_units(scene, clusters), events=False)
+            ta = hy.taylor_adaptive(
+                system.equations, system.reduce(list(state)), pars=system.parameters,
+                **result.precision.integrator_options(),
+            )
+            integrators[clusters] = (system, ta)
+        system, ta = integrators[clusters]
         ta.time = t0
-        ta.state[:] = s0
+        ta.state[:] = system.reduce(list(state))
         grid = np.linspace(t0, t1, points) if t1 > t0 else np.array([t0])
-        out = ta.propagate_grid(grid)
-        branches.append(Branch(times=grid, states=np.array(out[-1], dtype=float)))
+        out = np.array(ta.propagate_grid(grid)[-1], dtype=float)
+        full = np.array([system.expand(row) for row in out.tolist()])
+        branches.append(Branch(times=grid, states=full))
     return branches

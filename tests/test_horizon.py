@@ -1,0 +1,117 @@
+"""Predictability horizon (double vs quad) and the largest Lyapunov exponent."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import heyroll
+from heyroll.analysis.horizon import lyapunov_estimate, predictability_horizon
+from heyroll.interfaces.validation_figures import horizon_figure, lyapunov_figure
+
+#: Two equal solid balls, elastic rolling law: equal J_P and equal (R - r)/r, so every
+#: collision exchanges the rates and the motion is that of two free pendulums (integrable).
+EQUAL_BALLS = """
+name = "equal-balls"
+[track]
+type = "circle"
+radius = 1.0
+[[bodies]]
+shape = "solid_sphere"
+radius = 0.1
+mass = 1.0
+phi = -1.1
+dphi = 0.4
+[[bodies]]
+shape = "solid_sphere"
+radius = 0.1
+mass = 1.0
+phi = 0.7
+dphi = -0.3
+[collision]
+law = "hedrih"
+restitution = 1.0
+"""
+
+SINGLE = """
+[track]
+type = "circle"
+radius = 1.0
+[[bodies]]
+shape = "solid_sphere"
+radius = 0.1
+mass = 1.0
+phi = -1.0
+dphi = 0.0
+"""
+
+
+def chaotic_scene():
+    """The default scene's balls started faster: a chaotic scene (lambda ~ 0.4 1/s)."""
+    base = heyroll.default_scene()
+    return heyroll.Scene.make(
+        track=base.track, bodies=base.bodies, phi=["-1.2", "0.5"], dphi=["3", "-2"], law=base.law, g=base.g
+    )
+
+
+def test_integrable_scene_keeps_agreement_for_all_collisions():
+    h = predictability_horizon(heyroll.parse_scene(EQUAL_BALLS), n_max=120, t_end=1e4)
+    assert h.n_compared == 120
+    assert h.all_agree and h.n_agree == 120 and h.first_disagreement is None
+    assert np.all(h.same_pair)
+    assert h.rel_diff.max() < 1e-13
+    assert h.wall_time_double > 0 and h.wall_time_quad > 0
+    assert "agree on all 120" in h.message
+
+
+def test_default_scene_double_and_quad_agree_to_1e_14():
+    h = predictability_horizon(heyroll.default_scene(), n_max=40, t_end=1e4)
+    assert h.n_compared == 40 and np.all(h.same_pair)
+    assert h.rel_diff.max() <= 1e-14, h.rel_diff.max()
+    assert h.n_agree == 40
+
+
+def test_chaotic_scene_loses_agreement_and_reports_where():
+    h = predictability_horizon(chaotic_scene(), n_max=80, t_end=1e4, threshold=1e-10)
+    assert h.first_disagreement is not None and h.first_disagreement == h.n_agree + 1
+    assert 5 < h.n_agree < 80
+    assert np.all(h.rel_diff[: h.n_agree] <= 1e-10)
+    assert h.rel_diff[h.n_agree] > 1e-10 or not h.same_pair[h.n_agree]
+    assert h.t_horizon > 0
+    assert f"collision {h.first_disagreement} differs" in h.message
+
+
+def test_lyapunov_single_body_is_small_and_decays():
+    est = lyapunov_estimate(heyroll.parse_scene(SINGLE), t_end=120.0)
+    assert est.collisions == 0
+    assert abs(est.exponent) < 0.08
+    # Linear growth of the separation: the running estimate decays like log(t)/t.
+    quarter = est.history[len(est.history) // 4]
+    assert est.exponent < quarter
+    assert est.exponent < 2 * math.log(est.t_end) / est.t_end
+    assert not est.chaotic and "regular" in est.message
+
+
+def test_lyapunov_default_scene_is_finite_and_chaotic_one_positive():
+    default = lyapunov_estimate(heyroll.default_scene(), t_end=120.0)
+    assert math.isfinite(default.exponent) and default.collisions > 50
+    assert default.times.size == default.history.size > 50
+    assert default.t_end == pytest.approx(120.0)
+    chaotic = lyapunov_estimate(chaotic_scene(), t_end=120.0)
+    assert chaotic.exponent > 0.2 and chaotic.e_folding_time < 5.0 and chaotic.chaotic
+    assert chaotic.exponent > 3 * abs(default.exponent)
+
+
+def test_figures(tmp_path):
+    scene = heyroll.parse_scene(EQUAL_BALLS)
+    h = predictability_horizon(scene, n_max=10, t_end=1e4)
+    horizon_figure(h, tmp_path / "horizon.png")
+    est = lyapunov_estimate(scene, t_end=10.0)
+    lyapunov_figure({"equal balls": est}, tmp_path / "lyapunov.png")
+    lyapunov_figure(est, tmp_path / "lyapunov1.png")
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["horizon.png", "lyapunov.png", "lyapunov1.png"]
+    for name in names:
+        assert (tmp_path / name).read_bytes()[:4] == b"\x89PNG"
