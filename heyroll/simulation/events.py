@@ -80,13 +80,20 @@ def mode_events(scene, system: SceneSystem, log: CollisionLog, holder: list, tim
     """
     options = system.precision.integrator_options()
     fast = not any(u.is_cluster for u in system.units)
-    make = _make_callback if fast else _make_unit_callback
+    callbacks: list = []
+    # Three or more bodies: contacts can close at the same instant.
+    cascade = simultaneous_contacts(system, callbacks) if fast and system.n_bodies > 2 else None
+    for number in range(len(system.contacts)):
+        if fast:
+            callbacks.append(_make_callback(scene, system, number, log, holder, time_scale, cascade))
+        else:
+            callbacks.append(_make_unit_callback(scene, system, number, log, holder, time_scale))
     events = []
     for number in range(len(system.contacts)):
         events.append(
             hy.t_event(
                 system.gap_expressions[number],
-                callback=make(scene, system, number, log, holder, time_scale),
+                callback=callbacks[number],
                 direction=hy.event_direction.negative,
                 # heyoka's default cooldown (scaled by 1/|gap'|) hides the quick
                 # re-collisions of an accumulating (Zeno) sequence; one ulp of
@@ -262,8 +269,13 @@ def _apply(m: "WorkingMap", vi, vj):
     return vi - m.a_i * d, vj + m.a_j * d
 
 
-def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float):
-    """The hot path: every body free, the state is [phi_1..phi_N, dphi_1..dphi_N]."""
+def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float,
+                   cascade=None):
+    """The hot path: every body free, the state is [phi_1..phi_N, dphi_1..dphi_N].
+
+    Returns the event callback; its ``resolve(s, before, t)`` applies the law
+    to the pair alone (also used by ``cascade`` for simultaneous contacts).
+    """
     contact = system.contacts[number]
     pair = contact.pair
     pair_index = contact.pair_index
@@ -290,9 +302,8 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     h_bound = 2 * (a_i_stiff + a_j_stiff) * RESOLUTION_ULPS * eps
     t_bound = (a_i_stiff + a_j_stiff) * (1 - k) * RESOLUTION_ULPS * eps / 2
 
-    def on_collision(ta, d_sgn):
-        s = holder[0]
-        before = s.tolist()  # Python numbers: faster arithmetic than numpy scalars
+    def resolve(s, before, t) -> bool:
+        """Apply the law (or the policy) to this pair, record it; False: stop the run."""
         vi = before[vi_index]
         vj = before[vj_index]
         if extended:
@@ -309,11 +320,11 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         closing = vi - vj
         if vj_new - vi_new < -tiny * closing:
             if strict:
-                append((ta.time, pair_index, before, vi_new, vj_new, 0))
+                append((t, pair_index, before, vi_new, vj_new, 0))
                 s[vi_index], s[vj_index] = vi_new, vj_new
                 stop.reason = "inconsistent"
                 stop.message = (
-                    f"collision {log.count} at t = {float(ta.time):.17g}: bodies {i + 1} and {j + 1} still "
+                    f"collision {log.count} at t = {float(t):.17g}: bodies {i + 1} and {j + 1} still "
                     f"approach after the '{law_name}' law (gap rate {float(closing):.3g} -> "
                     f"{float(vi_new - vj_new):.3g} rad/s closing): the outcome would make them overlap; "
                     "stopped (collision.on_inconsistent = 'error')"
@@ -322,16 +333,26 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
             vi_new, vj_new = _apply(fallback, vi, vj)
             flag = 1
             log.fallbacks += 1
-        append((ta.time, pair_index, before, vi_new, vj_new, flag))
+        append((t, pair_index, before, vi_new, vj_new, flag))
         s[vi_index] = vi_new
         s[vj_index] = vj_new
+        return True
+
+    def on_collision(ta, d_sgn):
+        s = holder[0]
+        before = s.tolist()  # Python numbers: faster arithmetic than numpy scalars
+        t = ta.time
+        if not resolve(s, before, t):
+            return False
+        if cascade is not None and not cascade(s, t, (i, j)):
+            return False
         # Persistent contact? Only a slow separation can qualify: test that
         # first with |gap''| <= a_i + a_j, then judge with the actual gap''.
-        opening = vj_new - vi_new
+        opening = s[vj_index] - s[vi_index] if cascade is not None else records[-1][4] - records[-1][3]
         phi_i, phi_j = before[i], before[j]
-        if opening * opening <= h_bound * (1 + abs(phi_i) + abs(phi_j)) or opening <= t_bound * (abs(ta.time) + time_scale):
+        if opening * opening <= h_bound * (1 + abs(phi_i) + abs(phi_j)) or opening <= t_bound * (abs(t) + time_scale):
             gap_acc = a_i_stiff * sin(phi_i) - a_j_stiff * sin(phi_j)
-            if below_resolution(opening, gap_acc, k, float(ta.time), 1 + abs(phi_i) + abs(phi_j), time_scale, eps):
+            if below_resolution(opening, gap_acc, k, float(t), 1 + abs(phi_i) + abs(phi_j), time_scale, eps):
                 stop.reason, stop.data = "merge", {"contact": number}
                 return False
         if limit is not None and log.flushed + len(records) >= limit:
@@ -342,7 +363,48 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
             log.on_full()
         return True
 
+    on_collision.resolve = resolve
     return on_collision
+
+
+def simultaneous_contacts(system: SceneSystem, callbacks: list):
+    """Sequential impulses for contacts that close at the same instant (three or more bodies).
+
+    After a collision, any other pair of the two bodies' neighbours that
+    touches (gap within a few ulp) and still closes is resolved at the same
+    instant by its own law, and so on until no touching pair closes: the
+    classic sequential-impulse treatment of simultaneous impacts (momentum is
+    kept, and energy at k = 1; for unequal bodies the outcome can depend on
+    the order, a known property of simultaneous impacts). Collisions resolved
+    here are ordinary rows of the table, at the same t.
+    """
+    nb = system.n_bodies
+    eps = system.precision.epsilon
+    by_body: dict[int, list[int]] = {}
+    geometry = []
+    for number, c in enumerate(system.contacts):
+        by_body.setdefault(c.pair.i, []).append(number)
+        by_body.setdefault(c.pair.j, []).append(number)
+        with workprec():
+            geometry.append((c.pair.i, c.pair.j, float(c.pair.offset - c.pair.beta)))
+
+    def cascade(s, t, bodies) -> bool:
+        pending = list(bodies)
+        rounds = 0
+        while pending and rounds < 64 * nb:
+            body = pending.pop()
+            for number in by_body.get(body, ()):
+                i, j, constant = geometry[number]
+                gap = s[j] - s[i] + constant
+                closing = s[nb + i] - s[nb + j]
+                if abs(gap) <= RESOLUTION_ULPS * eps * (1 + abs(s[i]) + abs(s[j])) and closing > 0:
+                    rounds += 1
+                    if not callbacks[number].resolve(s, s.tolist(), t):
+                        return False
+                    pending += [i, j]
+        return True
+
+    return cascade
 
 
 def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float):
