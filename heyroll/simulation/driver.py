@@ -284,13 +284,15 @@ def _initial_contacts(scene, precision, pairs, units, full_state):
     system = build_system(scene, precision, pairs=pairs, units=units)
     nb = len(scene.bodies)
     eps = precision.epsilon
+    unit_state = system.reduce(full_state)
     for number, contact in enumerate(system.contacts):
         p = contact.pair
-        gap = gap_value(system, number, full_state)
+        a, b = contact.unit_a, contact.unit_b
+        gap = gap_value(system, number, unit_state)
         rate = full_state[nb + p.j] - full_state[nb + p.i]
         scale = 1 + abs(full_state[p.i]) + abs(full_state[p.j])
         if gap <= 4 * eps * scale and abs(rate) <= 4 * eps * (abs(full_state[nb + p.i]) + abs(full_state[nb + p.j]) + 1):
-            acc = unit_acceleration(system, contact.unit_b, full_state[p.j]) - unit_acceleration(system, contact.unit_a, full_state[p.i])
+            acc = unit_acceleration(system, b, unit_state[b]) - unit_acceleration(system, a, unit_state[a])
             if acc < 0:
                 units, full_state = _merge(scene, system, units, contact, full_state)
                 return _initial_contacts(scene, precision, pairs, units, full_state)
