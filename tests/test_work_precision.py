@@ -105,6 +105,21 @@ def test_scipy_baseline_reproduces_the_first_collisions(study, baseline):
     assert acc.max_rel <= 1e-9
 
 
+def test_scipy_baseline_right_hand_sides_agree(baseline):
+    import numpy as np
+
+    problem = baseline.problem_from_scene(heyroll.default_scene())
+    numpy_rhs, jac = baseline.make_rhs(problem, "numpy")
+    two_rhs, _ = baseline.make_rhs(problem, "two")
+    y = np.array([-1.1, 0.4, 0.7, -2.0])
+    assert np.allclose(numpy_rhs(0.0, y), two_rhs(0.0, y), rtol=1e-15, atol=0)
+    assert np.allclose(two_rhs(0.0, y)[2:], -problem.a * np.sin(y[:2]), rtol=1e-15, atol=0)
+    J = jac(0.0, y)  # d(rhs)/dy for the implicit methods
+    h = 1e-7
+    numeric = np.column_stack([(two_rhs(0.0, y + h * e) - two_rhs(0.0, y - h * e)) / (2 * h) for e in np.eye(4)])
+    assert np.allclose(J, numeric, atol=1e-7)
+
+
 def test_scipy_baseline_applies_heyroll_law(baseline):
     """The same impulse map as the engine: one elastic collision conserves the engine's energy."""
     import numpy as np
