@@ -13,6 +13,7 @@ from __future__ import annotations
 import gc
 import math
 import time
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -21,7 +22,7 @@ import mpmath
 import numpy as np
 
 from ..model.scene import Scene
-from .events import CollisionLog, StopRequest, mode_events, track_warnings
+from .events import CollisionLog, StopRequest, mode_events, mode_handlers
 from .precision import DOUBLE, Precision
 from .result import SimulationResult, Status
 from .system import SceneSystem, Unit, build_system, cluster_unit, gap_value, singleton_units, unit_acceleration
@@ -109,7 +110,10 @@ def simulate(
     full_state = [num(x) for x in scene.phi] + [num(x) for x in scene.dphi]
     initial_state = np.array(full_state)
     units = singleton_units(len(scene.bodies))
-    units, full_state = _initial_contacts(scene, precision, pairs, units, full_state)
+    first_system = build_system(scene, precision, pairs=pairs, units=units)
+    units, full_state = _initial_contacts(scene, precision, pairs, units, full_state, first_system)
+    if any(u.is_cluster for u in units):
+        first_system = build_system(scene, precision, pairs=pairs, units=units)
     modes = [ModeChange(0.0, _clusters(units), tuple(full_state))]
     t = (num(0), num(0))  # double-length time (hi, lo), kept across modes
     steps, outcome, first = 0, None, True
@@ -122,20 +126,21 @@ def simulate(
     if limit == 0:
         log.stop.reason, log.stop.message = "max_collisions", "max_collisions = 0: nothing integrated"
     while limit != 0:
-        system = build_system(scene, precision, pairs=pairs, units=units)
+        system = first_system if first else build_system(scene, precision, pairs=pairs, units=units)
         holder: list = [None]
-        events = mode_events(scene, system, log, holder, time_scale)
-        warnings = track_warnings(system, log)
-        ta = hy.taylor_adaptive(
-            system.equations, system.reduce(full_state), pars=system.parameters, t_events=events,
-            nt_events=warnings, **options
-        )
+        handlers, warnings = mode_handlers(scene, system, log, holder, time_scale)
+        ta, slots, nt_slots = _integrator(system, options, precision.number(precision.epsilon * time_scale))
+        slots[:], nt_slots[:] = handlers, warnings
+        ta.pars[:] = system.parameters
+        ta.state[:] = system.reduce(full_state)
         ta.dtime = t
+        if slots:
+            ta.reset_cooldowns()
         holder[0] = ta.state
         stream.ta = ta
         _reset(log.stop)
         if first:
-            _collide_touching_pairs(system, events, ta, holder)
+            _collide_touching_pairs(system, handlers, ta, holder)
             first = False
         if log.stop.reason is None:
             outcome, n_steps = _propagate(ta, log, precision.number(t_end))
@@ -279,9 +284,9 @@ def _split(scene, units, link):
     return tuple(units[: link.unit]) + (left, right) + tuple(units[link.unit + 1:])
 
 
-def _initial_contacts(scene, precision, pairs, units, full_state):
+def _initial_contacts(scene, precision, pairs, units, full_state, system=None):
     """Bodies that start touching at rest, pressed together, start in contact."""
-    system = build_system(scene, precision, pairs=pairs, units=units)
+    system = system or build_system(scene, precision, pairs=pairs, units=units)
     nb = len(scene.bodies)
     eps = precision.epsilon
     unit_state = system.reduce(full_state)
@@ -299,7 +304,7 @@ def _initial_contacts(scene, precision, pairs, units, full_state):
     return units, full_state
 
 
-def _collide_touching_pairs(system, events, ta, holder) -> None:
+def _collide_touching_pairs(system, handlers, ta, holder) -> None:
     """Bodies that start touching and approaching collide at t = 0.
 
     An event cannot see a root at the very start of a step, so such a
@@ -312,7 +317,7 @@ def _collide_touching_pairs(system, events, ta, holder) -> None:
         closing = state[nu + contact.unit_a] - state[nu + contact.unit_b]
         scale = 1 + abs(state[contact.unit_a]) + abs(state[contact.unit_b])
         if gap <= 4 * system.precision.epsilon * scale and closing > 0:
-            if not events[number].callback(ta, -1):
+            if not handlers[number](ta, -1):
                 return
 
 
@@ -395,13 +400,39 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
 
 
 def _overlap(scene: Scene, precision: Precision, state) -> str:
-    system = build_system(scene, precision, pairs=scene.pairs)
-    for number, contact in enumerate(system.contacts):
-        gap = float(gap_value(system, number, list(state)))
+    n = len(scene.bodies)
+    for p in scene.pairs:
+        gap = float(state[p.j]) - float(state[p.i]) + float(p.gap_constant())
         if gap < -OVERLAP_TOLERANCE:
-            p = contact.pair
             return (
                 f"bodies {p.i + 1} and {p.j + 1} overlap at the end of the run (gap {gap:.3g} rad): "
                 "a collision was missed"
             )
     return ""
+
+
+#: Integrators already built, by shape (see SceneSystem.shape) and options:
+#: a run reuses one with its own parameters, state and handlers.
+_INTEGRATORS: "OrderedDict[tuple, tuple]" = OrderedDict()
+_CACHE_SIZE = 32
+
+
+def _integrator(system: SceneSystem, options: dict, cooldown):
+    """(taylor_adaptive, slots, nt_slots) for ``system``'s shape, built once and reused."""
+    key = (system.shape, repr(options.get("tol")), options["high_accuracy"], repr(cooldown))
+    entry = _INTEGRATORS.get(key)
+    if entry is None:
+        slots: list = []
+        nt_slots: list = []
+        events, nt_events = mode_events(system, cooldown, slots, nt_slots)
+        ta = hy.taylor_adaptive(
+            system.equations, system.initial_state, pars=system.parameters, t_events=events,
+            nt_events=nt_events, **options,
+        )
+        entry = (ta, slots, nt_slots)
+        _INTEGRATORS[key] = entry
+        if len(_INTEGRATORS) > _CACHE_SIZE:
+            _INTEGRATORS.popitem(last=False)
+    else:
+        _INTEGRATORS.move_to_end(key)
+    return entry

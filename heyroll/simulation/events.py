@@ -71,84 +71,83 @@ class CollisionLog:
         return self.flushed + len(self.records)
 
 
-def mode_events(scene, system: SceneSystem, log: CollisionLog, holder: list, time_scale: float) -> list:
-    """Terminal events of one contact mode.
+def mode_handlers(scene, system: SceneSystem, log: CollisionLog, holder: list, time_scale: float) -> tuple[list, list]:
+    """The callbacks of one contact mode, in the order of :func:`mode_events`.
 
-    ``holder[0]`` must be set to the integrator's state array (a view into
-    heyoka's buffer) before integrating; callbacks use it to avoid re-wrapping
-    the buffer at every collision.
+    Returns (terminal handlers, non-terminal handlers). ``holder[0]`` must be
+    set to the integrator's state array (a view into heyoka's buffer) before
+    integrating; the handlers use it to avoid re-wrapping the buffer at every
+    collision.
     """
-    options = system.precision.integrator_options()
     fast = not any(u.is_cluster for u in system.units)
-    callbacks: list = []
+    handlers: list = []
     # Three or more bodies: contacts can close at the same instant.
-    cascade = simultaneous_contacts(system, callbacks) if fast and system.n_bodies > 2 else None
+    cascade = simultaneous_contacts(system, handlers) if fast and system.n_bodies > 2 else None
     for number in range(len(system.contacts)):
         if fast:
-            callbacks.append(_make_callback(scene, system, number, log, holder, time_scale, cascade))
+            handlers.append(_make_callback(scene, system, number, log, holder, time_scale, cascade))
         else:
-            callbacks.append(_make_unit_callback(scene, system, number, log, holder, time_scale))
-    events = []
-    for number in range(len(system.contacts)):
-        events.append(
-            hy.t_event(
-                system.gap_expressions[number],
-                callback=callbacks[number],
-                direction=hy.event_direction.negative,
-                # heyoka's default cooldown (scaled by 1/|gap'|) hides the quick
-                # re-collisions of an accumulating (Zeno) sequence; one ulp of
-                # the motion's time scale is far below any interval the contact
-                # criterion lets through, and direction filtering does the rest.
-                # (A cooldown of exactly 0 loses collisions: measured.)
-                cooldown=system.precision.number(system.precision.epsilon * time_scale),
-                **options,
-            )
-        )
-    for number in range(len(system.links)):
-        events.append(
-            hy.t_event(
-                system.link_expressions[number],
-                callback=_stopper(log, "split", {"link": number}),
-                direction=hy.event_direction.negative,
-                **options,
-            )
-        )
-    for number, ev in enumerate(system.track_events):
-        if ev.terminal:
-            events.append(
-                hy.t_event(
-                    system.track_expressions[number],
-                    callback=_track_stopper(log, ev, holder, system),
-                    direction=hy.event_direction.negative,
-                    **options,
-                )
-            )
-    return events
+            handlers.append(_make_unit_callback(scene, system, number, log, holder, time_scale))
+    handlers += [_stopper(log, "split", {"link": number}) for number in range(len(system.links))]
+    handlers += [_track_stopper(log, ev, holder, system) for ev in system.track_events if ev.terminal]
+    warnings = [_track_warning(log, ev, system) for ev in system.track_events if not ev.terminal]
+    return handlers, warnings
 
 
-def track_warnings(system: SceneSystem, log: CollisionLog) -> list:
-    """Non-terminal events that record, once per body, where a two-sided track pulls.
+def mode_events(system: SceneSystem, cooldown, slots: list, nt_slots: list) -> tuple[list, list]:
+    """heyoka events of one contact mode whose callbacks call ``slots[n]`` / ``nt_slots[n]``.
 
-    On a two-sided track a body whose normal force changes sign goes on
-    rolling (the outer race holds it); the first time is worth knowing.
+    The indirection lets one compiled integrator serve many runs of the same
+    shape: each run puts its own handlers (:func:`mode_handlers`) in the slots.
+    Collisions (gap closing), contact splits (contact force reaching 0,
+    decreasing) and track limits are terminal; track warnings are not.
     """
     options = system.precision.integrator_options()
-    events = []
-    for number, ev in enumerate(system.track_events):
-        if ev.terminal:
-            continue
+    negative = hy.event_direction.negative
 
-        def record(ta, t, d_sgn, body=ev.body):
-            if body not in log.warnings:
-                # Non-terminal events see the state at the end of the step: ask for t's.
-                full = system.expand(ta.update_d_output(t).tolist())
-                log.warnings[body] = (
-                    f"body {body + 1}: the normal force of the track changes sign at t = {float(t):.17g} s, "
-                    f"phi = {float(full[body]):.6g} rad (on a one-sided track it would leave it here)"
-                )
+    def forward(n):
+        return lambda ta, d_sgn: slots[n](ta, d_sgn)
 
-        events.append(hy.nt_event(system.track_expressions[number], record, direction=hy.event_direction.negative, **options))
-    return events
+    def forward_nt(n):
+        return lambda ta, t, d_sgn: nt_slots[n](ta, t, d_sgn)
+
+    events = [
+        # heyoka's default cooldown (scaled by 1/|gap'|) hides the quick
+        # re-collisions of an accumulating (Zeno) sequence; one ulp of the
+        # motion's time scale is far below any interval the contact criterion
+        # lets through, and direction filtering does the rest. (A cooldown of
+        # exactly 0 loses collisions: measured.)
+        hy.t_event(gap, callback=forward(n), direction=negative, cooldown=cooldown, **options)
+        for n, gap in enumerate(system.gap_expressions)
+    ]
+    expressions = list(system.link_expressions)
+    expressions += [x for x, ev in zip(system.track_expressions, system.track_events) if ev.terminal]
+    events += [
+        hy.t_event(x, callback=forward(len(system.gap_expressions) + n), direction=negative, **options)
+        for n, x in enumerate(expressions)
+    ]
+    nt_expressions = [x for x, ev in zip(system.track_expressions, system.track_events) if not ev.terminal]
+    nt_events = [hy.nt_event(x, forward_nt(n), direction=negative, **options) for n, x in enumerate(nt_expressions)]
+    return events, nt_events
+
+
+def _track_warning(log, ev, system):
+    """Record, once per body, where a two-sided track's normal force changes sign.
+
+    On a two-sided track such a body goes on rolling (the outer race holds
+    it); the first time is worth knowing.
+    """
+
+    def record(ta, t, d_sgn, body=ev.body):
+        if body not in log.warnings:
+            # Non-terminal events see the state at the end of the step: ask for t's.
+            full = system.expand(ta.update_d_output(t).tolist())
+            log.warnings[body] = (
+                f"body {body + 1}: the normal force of the track changes sign at t = {float(t):.17g} s, "
+                f"phi = {float(full[body]):.6g} rad (on a one-sided track it would leave it here)"
+            )
+
+    return record
 
 
 def _stopper(log, reason, data):

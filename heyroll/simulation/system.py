@@ -108,6 +108,18 @@ class SceneSystem:
         return len(self.units)
 
     @property
+    def shape(self) -> tuple:
+        """Everything the compiled code depends on (constants are parameters)."""
+        return (
+            self.n_bodies,
+            tuple(u.members for u in self.units),
+            tuple(c.pair_index for c in self.contacts),
+            tuple((l.unit, l.position) for l in self.links),
+            tuple((e.body, e.kind, e.terminal) for e in self.track_events),
+            self.precision.name,
+        )
+
+    @property
     def pairs(self) -> tuple[ContactPair, ...]:
         return tuple(c.pair for c in self.contacts)
 
