@@ -155,8 +155,8 @@ class EnergySink:
     * ``recurrence``: (collision number, period) of the first state after a
       collision equal bit for bit to an earlier one (periods up to
       ``window`` collisions are seen), else None; ``distinct_last``: the
-      number of distinct energy-error values in the last chunk (a frozen
-      error has a handful).
+      number of distinct energy-error values in the latest chunk of at least
+      1000 collisions (``frozen``: under 1 % of them).
     """
 
     def __init__(self, n_max: int, *, per_decade: int = 20, blocks: int = 1000, window: int = 65536, extra=()):
@@ -179,7 +179,7 @@ class EnergySink:
         self._block_running_max = 0.0
         self.last_n, self.last_err, self.max_abs_err = 0, 0.0, 0.0
         self.recurrence = None
-        self.distinct_last = None
+        self.distinct_last, self._judged_rows = None, 0
         self._rounding_var, self._rounding_rows = 0.0, 0
         self._tail = None  # the last ``window`` states (recurrence across chunks)
         self._tail_first = 1
@@ -226,7 +226,8 @@ class EnergySink:
 
         self.max_abs_err = max(self.max_abs_err, float(absolute.max()))
         self.last_n, self.last_err = int(numbers[-1]), float(err[-1])
-        self.distinct_last = int(np.unique(err).size)
+        if m >= 1000 or self._judged_rows < 1000:  # judge on the latest chunk of >= 1000 collisions
+            self.distinct_last, self._judged_rows = int(np.unique(err).size), m
 
         if self.recurrence is None:
             states = np.asarray(after, dtype=float)
@@ -254,8 +255,8 @@ class EnergySink:
 
     @property
     def frozen(self) -> bool:
-        """The energy error took a handful of values over the last chunk (>= 1000 collisions)."""
-        return self.distinct_last is not None and self.distinct_last * 100 < min(self.last_n, 65536) and self.last_n >= 1000
+        """The energy error took fewer than 1 % distinct values over the latest chunk of >= 1000 collisions."""
+        return self._judged_rows >= 1000 and self.distinct_last * 100 < self._judged_rows
 
     def as_dict(self) -> dict:
         return {

@@ -65,7 +65,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--precision", default="double", help="double | quad | mp:BITS: the whole integration in that type (default: double)"
     )
-    run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (slower; for very long runs)")
+    run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (measured: no gain on collision times or energy, ~1%% cost)")
     run.add_argument("--no-figures", action="store_true", help="skip phase_portrait.png and energy.png")
     run.add_argument(
         "--table", choices=("csv", "npy"), default="csv",
