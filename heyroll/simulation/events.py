@@ -17,6 +17,7 @@ afterwards, vectorized. The callback also judges the outcome:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -196,6 +197,7 @@ def below_resolution(opening, gap_acceleration, restitution, t, scale, time_scal
     return h <= RESOLUTION_ULPS * eps * scale or remaining <= RESOLUTION_ULPS * eps * (abs(t) + time_scale)
 
 
+@functools.lru_cache(maxsize=256)
 def fallback_map(scene, pair) -> ImpulseMap:
     """Newton's law on the gap rate with generalized masses, for one pair."""
     law = GeneralizedNewtonLaw(restitution=scene.law.restitution)
@@ -235,6 +237,7 @@ class WorkingMap:
     extended: bool
 
 
+@functools.lru_cache(maxsize=256)
 def working_map(law_map, precision) -> WorkingMap:
     """Round the law's constants once for ``precision`` (see :class:`WorkingMap`)."""
     extended = precision.name == "double" and EXTENDED is not None

@@ -25,6 +25,7 @@ constants are runtime parameters, so scenes of one shape share compiled code.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -175,6 +176,7 @@ def scene_pair(scene: Scene, i: int, j: int) -> ContactPair:
     return scene.pairs[scene_pair_index(scene, i, j)]
 
 
+@functools.lru_cache(maxsize=64)
 def build_system(
     scene: Scene,
     precision: Precision,
@@ -188,7 +190,8 @@ def build_system(
     ``units`` defaults to every body free. Gaps are watched between
     neighbouring units for the pairs in ``pairs`` (default: those the scene's
     energy can reach). ``events=False`` gives the bare equations of motion
-    (no event expressions, no parameters for them).
+    (no event expressions, no parameters for them). Results are cached (scenes
+    are immutable): treat the returned lists as read-only.
     """
     n = len(scene.bodies)
     units = singleton_units(n) if units is None else tuple(units)
