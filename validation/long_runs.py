@@ -59,7 +59,7 @@ from energy_study import (  # noqa: E402
 HERE = Path(__file__).resolve().parent
 REPORTS = HERE / "reports"
 
-#: The committed default scene (paper section 4): two steel balls.
+#: Two steel balls as in the default scene (paper section 4), ball 1 started higher (phi = -1.2).
 BALLS = """name = "balls-10-15"
 g = 9.81
 [track]
