@@ -126,7 +126,10 @@ def simulate(
 
     if limit == 0:
         log.stop.reason, log.stop.message = "max_collisions", "max_collisions = 0: nothing integrated"
-    while limit != 0:
+    start_limit = _track_limit_at_start(scene, full_state)
+    if start_limit:
+        log.stop.reason, log.stop.message = start_limit
+    while limit != 0 and not start_limit:
         system = first_system if first else build_system(scene, precision, pairs=pairs, units=units)
         holder: list = [None]
         handlers, warnings = mode_handlers(scene, system, log, holder, time_scale)
@@ -204,7 +207,7 @@ def simulate(
         wall_time_s=time.perf_counter() - started,
         steps=steps,
         settings={
-            "tolerance": float(ta.tol) if limit != 0 else float(precision.epsilon),
+            "tolerance": float(precision.epsilon if tolerance is None else tolerance),
             "high_accuracy": high_accuracy,
             "t_end": float(t_end),
             "max_collisions": limit,
@@ -303,6 +306,29 @@ def _initial_contacts(scene, precision, pairs, units, full_state, system=None):
                 units, full_state = _merge(scene, system, units, contact, full_state)
                 return _initial_contacts(scene, precision, pairs, units, full_state)
     return units, full_state
+
+
+def _track_limit_at_start(scene: Scene, state) -> tuple[str, str] | None:
+    """A body that starts where the track cannot hold it (one-sided, N < 0) or where it slips.
+
+    Events only see later crossings, so the start is checked here, with the
+    same forces as the events (see system._track_events).
+    """
+    n = len(scene.bodies)
+    g = float(scene.g)
+    mu = None if scene.track_friction is None else float(scene.track_friction)
+    for k, body in enumerate(scene.bodies):
+        phi, dphi = float(state[k]), float(state[n + k])
+        rho = float(scene.track.path_radius(body))
+        normal = rho * dphi * dphi + g * math.cos(phi)
+        where = f"at phi = {phi:.17g} rad, dphi = {dphi:.17g} rad/s, t = 0 s"
+        if scene.track_sides == "one" and normal < 0:
+            return "left_track", f"body {k + 1} cannot stay on the one-sided track: N = m (rho phi'^2 + g cos phi) < 0 {where}"
+        if mu is not None and body.kappa > 1:
+            friction = g * math.sin(phi) * (1 - 1 / float(body.kappa))
+            if abs(friction) > mu * normal:
+                return "slip", f"body {k + 1} slips from the start: the friction needed to roll exceeds mu N {where}"
+    return None
 
 
 def _collide_touching_pairs(system, handlers, ta, holder) -> None:

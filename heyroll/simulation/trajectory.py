@@ -41,13 +41,16 @@ def sample_branches(result: SimulationResult, *, max_branches: int | None = None
     the collisions kept in memory, for a streamed run).
     """
     scene = result.scene
-    breaks = [(float(m.t), np.asarray(m.state, dtype=float), m.clusters) for m in result.mode_changes]
-    if not breaks:
-        breaks = [(0.0, np.asarray(result.initial_state, dtype=float), ())]
-    clusters_at = sorted(breaks, key=lambda b: b[0])
-    for t, s in zip(result.times, result.states_after):
-        breaks.append((float(t), np.asarray(s, dtype=float), None))
-    breaks.sort(key=lambda b: b[0])
+    modes = [(float(m.t), np.asarray(m.state, dtype=float), m.clusters) for m in result.mode_changes]
+    if not modes:
+        modes = [(0.0, np.asarray(result.initial_state, dtype=float), ())]
+    clusters_at = sorted(modes, key=lambda b: b[0])
+    # At equal times a mode change comes after the collision that caused it
+    # (the branch then starts from the merged state); the initial mode first.
+    tagged = [(float(t), 0, np.asarray(s, dtype=float), None) for t, s in zip(result.times, result.states_after)]
+    tagged += [(t, -1 if n == 0 else 1, state, clusters) for n, (t, state, clusters) in enumerate(modes)]
+    tagged.sort(key=lambda b: (b[0], b[1]))
+    breaks = [(t, state, clusters) for t, _, state, clusters in tagged]
     streamed = result.kept_collisions < result.n_collisions
     t_stop = float(result.times[-1]) if streamed and result.kept_collisions else float(result.t_final)
     breaks = [b for b in breaks if b[0] <= t_stop]
