@@ -46,7 +46,12 @@ def to_mpf(value: Real) -> mpmath.mpf:
 
 
 def is_finite(value: Real) -> bool:
-    """True for a finite real number (rejects NaN and infinities)."""
+    """True for a finite real number that a double can hold (rejects NaN, infinities, 1e400)."""
+    try:
+        if not math.isfinite(float(value)):
+            return False
+    except (ValueError, OverflowError, TypeError):
+        return False
     if isinstance(value, Decimal):
         return value.is_finite()
     if isinstance(value, (int, Fraction)):
@@ -67,3 +72,8 @@ def is_number(value) -> bool:
     return isinstance(value, (int, float, Decimal, Fraction, mpmath.mpf)) and not isinstance(
         value, bool
     )
+
+
+def is_positive_double(value: Real) -> bool:
+    """True when ``value`` rounds to a positive double (not 0 by underflow)."""
+    return float(value) > 0

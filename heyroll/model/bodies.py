@@ -65,6 +65,8 @@ def _positive(value: Real, field: str, *, allow_zero: bool = False) -> mpmath.mp
     if x < 0 or (x == 0 and not allow_zero):
         rule = "must be >= 0" if allow_zero else "must be > 0"
         raise SceneError(field, f"{rule}, got {value}")
+    if x > 0 and float(x) == 0:
+        raise SceneError(field, f"must be at least 1e-300 (a double's range), got {value}")
     return x
 
 

@@ -39,8 +39,8 @@ class RunSettings:
         if not is_finite(t_end):
             raise SceneError(f"{field}.t_end", f"must be a finite number, got {t_end!r}")
         t = to_mpf(t_end)
-        if t <= 0:
-            raise SceneError(f"{field}.t_end", f"must be > 0, got {t_end}")
+        if t <= 0 or float(t) == 0:
+            raise SceneError(f"{field}.t_end", f"must be > 0 (and at least 1e-300), got {t_end}")
         if max_collisions is not None:
             if isinstance(max_collisions, bool) or not isinstance(max_collisions, int):
                 raise SceneError(f"{field}.max_collisions", f"must be a whole number, got {max_collisions!r}")
@@ -120,8 +120,8 @@ class Scene:
         if not is_finite(g):
             raise SceneError("g", f"must be a finite number, got {g!r}")
         gv = to_mpf(g)
-        if gv <= 0:
-            raise SceneError("g", f"must be > 0, got {g}")
+        if gv <= 0 or float(gv) == 0:
+            raise SceneError("g", f"must be > 0 (and at least 1e-300), got {g}")
         for n, body in enumerate(bodies, start=1):
             track.check_body(body, f"bodies[{n}]")
         phis = tuple(_finite(p, f"bodies[{n}].phi") for n, p in enumerate(phi, start=1))

@@ -27,8 +27,8 @@ class CircleTrack:
         if not is_finite(radius):
             raise SceneError(field, f"must be a finite number, got {radius!r}")
         R = to_mpf(radius)
-        if R <= 0:
-            raise SceneError(field, f"must be > 0, got {radius}")
+        if R <= 0 or float(R) == 0:
+            raise SceneError(field, f"must be > 0 (and at least 1e-300), got {radius}")
         return cls(radius=R)
 
     def check_body(self, body: Body, field: str) -> None:
