@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 from ..errors import SceneError
+from ..model.path_scene import PathScene
 from ..simulation.driver import simulate
 from ..simulation.precision import Precision
 from .scene_file import default_scene, default_scene_text, load_scene
@@ -63,7 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--t-end", dest="t_end", help="end time in s (overrides [run] t_end)")
     run.add_argument("--max-collisions", dest="max_collisions", help="stop after N collisions")
     run.add_argument(
-        "--precision", default="double", help="double | quad | mp:BITS: the whole integration in that type (default: double)"
+        "--precision", default=None,
+        help="circle: double | quad | mp:BITS, the whole integration in that type (default: double); "
+             "curve and arc tracks: double | long (x87 extended, the default)"
     )
     run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (measured: no gain on collision times or energy, ~1%% cost)")
     run.add_argument("--no-figures", action="store_true", help="skip phase_portrait.png and energy.png")
@@ -76,6 +79,15 @@ def build_parser() -> argparse.ArgumentParser:
     val.add_argument("scene", nargs="?", help="scene file (TOML); the built-in default scene if omitted")
     val.add_argument("--out", default="heyroll-validation", help="output directory (default: heyroll-validation)")
     val.add_argument("--collisions", default="20", help="collisions compared with the reference (default: 20)")
+    eq = sub.add_parser("equilibria", help="relative equilibria of a body on a curve or arc-chain track (centres, saddles)")
+    eq.add_argument("scene", help="scene file (TOML) with track type curve, arcs or three_arcs")
+    eq.add_argument("--json", action="store_true", help="print a JSON array of {x, type} sorted by x")
+    eq.add_argument("--body", default="1", help="which body (1..N; default 1): equilibria depend on its radius")
+    por = sub.add_parser("portrait", help="phase portrait, energy surface and bifurcation diagram of a path-track scene")
+    por.add_argument("scene", help="scene file (TOML) with track type curve, arcs or three_arcs")
+    por.add_argument("--out", default="heyroll-portrait", help="output directory (default: heyroll-portrait)")
+    por.add_argument("--body", default="1", help="which body (1..N; default 1)")
+    por.add_argument("--omega-max", dest="omega_max", help="bifurcation diagram from 0 to this Omega (rad/s)")
     show = sub.add_parser("default-scene", help="print the built-in default scene as TOML")
     show.set_defaults()
     return parser
@@ -90,6 +102,10 @@ def main(argv: list[str] | None = None) -> int:
             return EXIT_OK
         if args.command == "validate":
             return _validate(args)
+        if args.command == "equilibria":
+            return _equilibria(args)
+        if args.command == "portrait":
+            return _portrait(args)
         return _run(args)
     except SceneError as exc:
         print(f"heyroll: error: {exc}", file=sys.stderr)
@@ -100,11 +116,13 @@ def _run(args) -> int:
     # Every input is checked before anything is written.
     t_end = _positive_time(args.t_end) if args.t_end is not None else None
     max_collisions = _collision_count(args.max_collisions) if args.max_collisions is not None else ...
-    precision = Precision.parse(args.precision, "--precision")
     scene = load_scene(args.scene) if args.scene else default_scene()
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise BadInput("--out", f"{out} exists and is not a directory")
+    if isinstance(scene, PathScene):
+        return _run_path(args, scene, out, t_end, max_collisions)
+    precision = Precision.parse(args.precision or "double", "--precision")
     if args.table == "npy" and precision.name != "double":
         raise BadInput("--table", "npy holds float64 columns: use csv for quad and MPFR runs")
     from .outputs import table_sink, write_run
@@ -170,6 +188,102 @@ def _sigterm_as_interrupt():
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def _path_scene(path: str, command: str) -> PathScene:
+    scene = load_scene(path)
+    if not isinstance(scene, PathScene):
+        raise BadInput("track.type", f"'heyroll {command}' needs a curve, arcs or three_arcs track, got circle")
+    return scene
+
+
+def _body_number(text: str, scene: PathScene) -> int:
+    n = _collision_count(text, "--body")
+    if not 1 <= n <= len(scene.bodies):
+        raise BadInput("--body", f"must be in 1..{len(scene.bodies)}, got {n}")
+    return n - 1
+
+
+def _equilibria(args) -> int:
+    import json
+
+    from .path_outputs import equilibria_list
+
+    scene = _path_scene(args.scene, "equilibria")
+    body = _body_number(args.body, scene)
+    eq = equilibria_list(scene, body)
+    if args.json:
+        print(json.dumps([e.as_json() for e in eq]))
+        return EXIT_OK
+    print(f"{scene.name}: body {body + 1}, Omega = {float(scene.frame.omega):.17g} rad/s, "
+          f"axis x = {float(scene.frame.axis_x):.17g} m")
+    print(f"{'x':>24} {'type':>7} {scene.coordinate:>24} {'stiffness h_q':>24} {'V/m (J/kg)':>24}")
+    for e in eq:
+        print(f"{e.x:24.17g} {e.type:>7} {e.q:24.17g} {e.stiffness:24.17g} {e.potential:24.17g}")
+    return EXIT_OK
+
+
+def _portrait(args) -> int:
+    import numpy as np
+
+    from .path_outputs import default_omegas, write_portrait
+
+    scene = _path_scene(args.scene, "portrait")
+    body = _body_number(args.body, scene)
+    omegas = default_omegas(scene)
+    if args.omega_max is not None:
+        top = _positive_number(args.omega_max, "--omega-max")
+        omegas = np.linspace(0.0, top, 121)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise BadInput("--out", f"{out} exists and is not a directory")
+    data = write_portrait(scene, out, scene_source=args.scene, body=body, omegas=omegas)
+    for e in data["equilibria"]:
+        print(f"{e['type']:>7} at x = {e['x']:.17g}")
+    for b in data["bifurcations"]:
+        print(f"bifurcation at Omega = {b['omega']:.17g} rad/s near x = {b['x']:.6g}: "
+              f"{b['equilibria_before']} -> {b['equilibria_after']} equilibria")
+    print(f"portrait checked against {data['check']['integrated_trajectories']} integrated trajectories: "
+          f"first integral drift {data['check']['worst_relative_first_integral_drift']:.2g} (relative)")
+    print(f"wrote {out}/")
+    return EXIT_OK
+
+
+def _positive_number(text: str, field: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise BadInput(field, f"must be a number, got {text!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise BadInput(field, f"must be a finite number > 0, got {text}")
+    return value
+
+
+def _run_path(args, scene: PathScene, out: Path, t_end, max_collisions) -> int:
+    from ..simulation.path_driver import simulate_path
+    from .path_outputs import write_path_run
+
+    precision = args.precision or "long"
+    if precision not in ("double", "long"):
+        raise BadInput("--precision", f"curve and arc tracks run in double or long, got {precision!r}")
+    if args.table != "csv":
+        raise BadInput("--table", "path-track runs write csv")
+    with _sigterm_as_interrupt():
+        try:
+            result = simulate_path(scene, t_end=t_end, max_collisions=None if max_collisions is ... else max_collisions,
+                                   keep_branches=not args.no_figures, precision=precision)
+        except KeyboardInterrupt:
+            print("heyroll: interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
+    write_path_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures)
+    print(f"{scene.name}: {len(scene.bodies)} bodies on a {scene.track.kind} track, "
+          f"Omega = {float(scene.frame.omega):.6g} rad/s")
+    print(f"{result.status.value}: {result.message}")
+    print(f"{result.n_collisions} collisions, {len(result.limiter_impacts)} limiter impacts, "
+          f"{len(result.junctions)} junction crossings, t_final = {result.t_final:.17g} s, "
+          f"first integral {result.energy_initial:.17g} -> {result.energy_final:.17g} J, {result.wall_time:.3g} s wall")
+    print(f"wrote {out}/")
+    return EXIT_OK if result.status.success else EXIT_RUN_FAILED
 
 
 def _validate(args) -> int:

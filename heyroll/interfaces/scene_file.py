@@ -17,17 +17,33 @@ from ..model._numbers import is_finite, is_number, to_mpf, workprec
 from ..model.bodies import Body, parse_shape
 from ..model.laws import make_law
 from ..model.scene import STANDARD_GRAVITY, RunSettings, Scene
+from ..model.path_scene import PathScene
+from ..model.paths import ArcChainTrack, CurveTrack, Frame, Segment
 from ..model.tracks import CircleTrack
 
-TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run"}
+TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "frame"}
 TRACK_KEYS = {"type", "radius", "friction", "sides"}
-TRACK_TYPES = ("circle",)
-BODY_KEYS = {"shape", "kappa", "radius", "mass", "density", "phi", "dphi", "omega"}
+TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs")
+#: Keys of each path track type (paper section 5).
+PATH_TRACK_KEYS = {
+    "curve": {"type", "y", "x_min", "x_max", "limiter_restitution"},
+    "arcs": {"type", "segments", "start_x", "start_y", "limiter_restitution"},
+    "three_arcs": {"type", "radius", "hump_radius", "beta", "limiter_restitution"},
+}
+SEGMENT_KEYS = {"arc": {"kind", "radius", "side", "start", "end"}, "line": {"kind", "angle", "length"}}
+FRAME_KEYS = {"omega", "axis_x"}
+BODY_SHAPE_KEYS = {"shape", "kappa", "radius", "mass", "density"}
+BODY_KEYS = BODY_SHAPE_KEYS | {"phi", "dphi", "omega"}
+#: Where a body starts on a path track: curve (contact abscissa x and its
+#: rate), arc chain (arc length s of the centre's path, or a segment and the
+#: angle on it: phi on concave arcs, psi on convex ones, distance on lines).
+PATH_BODY_KEYS = {"curve": BODY_SHAPE_KEYS | {"x", "dx"},
+                  "arcs": BODY_SHAPE_KEYS | {"s", "ds", "segment", "angle", "dangle"}}
 COLLISION_KEYS = {"law", "restitution", "on_inconsistent"}
 RUN_KEYS = {"t_end", "max_collisions"}
 
 
-def load_scene(path: str | Path) -> Scene:
+def load_scene(path: str | Path) -> Scene | PathScene:
     """Read and check a scene file; raises SceneError (a ValueError) on bad input."""
     path = Path(path)
     try:
@@ -49,7 +65,7 @@ def default_scene_text() -> str:
     return resources.files("heyroll").joinpath("scenes/default.toml").read_text(encoding="utf-8")
 
 
-def parse_scene(text: str, *, source: str = "<scene>", default_name: str = "scene") -> Scene:
+def parse_scene(text: str, *, source: str = "<scene>", default_name: str = "scene") -> Scene | PathScene:
     try:
         data = tomllib.loads(text, parse_float=Decimal)
     except tomllib.TOMLDecodeError as exc:
@@ -57,25 +73,26 @@ def parse_scene(text: str, *, source: str = "<scene>", default_name: str = "scen
     return scene_from_dict(data, default_name=default_name)
 
 
-def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
+def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene | PathScene:
     _no_unknown(data, TOP_KEYS, "")
     name = data.get("name", default_name)
     if not isinstance(name, str):
         raise SceneError("name", "must be a string")
     g = _number(data, "g", "", default=STANDARD_GRAVITY)
     track_table = _table(data, "track", required=True)
+    if track_table.get("type") in PATH_TRACK_KEYS:
+        return _path_scene(data, track_table, name, g)
+    if "frame" in data:
+        frame = _frame(_table(data, "frame", required=False))
+        if frame.rotating:
+            raise SceneError("frame.omega", "a rotating plane needs track type curve, arcs or three_arcs "
+                             "(a circle is type = \"arcs\" with one concave segment)")
     track = _track(track_table)
     friction = _number(track_table, "friction", "track")
     sides = track_table.get("sides", "two")
     if not isinstance(sides, str):
         raise SceneError("track.sides", "must be a string: one | two")
-    bodies_data = data.get("bodies")
-    if bodies_data is None:
-        raise SceneError("bodies", "missing: give at least one [[bodies]] table")
-    if not isinstance(bodies_data, list) or not all(isinstance(b, dict) for b in bodies_data):
-        raise SceneError("bodies", "must be an array of tables ([[bodies]])")
-    if not bodies_data:
-        raise SceneError("bodies", "at least one body is required")
+    bodies_data = _bodies_list(data)
     bodies, phis, dphis = [], [], []
     for n, entry in enumerate(bodies_data, start=1):
         body, phi, dphi = _body(entry, f"bodies[{n}]", track)
@@ -84,10 +101,7 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
         dphis.append(dphi)
     collision = _table(data, "collision", required=False)
     _no_unknown(collision, COLLISION_KEYS, "collision")
-    law_name = collision.get("law", "hedrih")
-    if not isinstance(law_name, str):
-        raise SceneError("collision.law", "must be a string")
-    law = make_law(law_name, _number(collision, "restitution", "collision", default="1"))
+    law = _law(collision)
     policy = collision.get("on_inconsistent", "newton")
     if not isinstance(policy, str):
         raise SceneError("collision.on_inconsistent", "must be a string: newton | error")
@@ -99,6 +113,106 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
         track=track, bodies=bodies, phi=phis, dphi=dphis, law=law, g=g, run=settings, name=name,
         friction=friction, on_inconsistent=policy, track_sides=sides,
     )
+
+
+def _frame(table: dict) -> Frame:
+    _no_unknown(table, FRAME_KEYS, "frame")
+    return Frame.make(_number(table, "omega", "frame", default="0"), _number(table, "axis_x", "frame", default="0"))
+
+
+def _path_track(table: dict):
+    kind = table["type"]
+    _no_unknown(table, PATH_TRACK_KEYS[kind], "track")
+    if kind == "curve":
+        return CurveTrack.make(table.get("y"), _number(table, "x_min", "track", required=True),
+                               _number(table, "x_max", "track", required=True))
+    if kind == "three_arcs":
+        return ArcChainTrack.three_arcs(_number(table, "radius", "track", required=True),
+                                        _number(table, "hump_radius", "track", required=True),
+                                        _number(table, "beta", "track", default="0"))
+    segments_data = table.get("segments")
+    if not isinstance(segments_data, list) or not all(isinstance(x, dict) for x in segments_data):
+        raise SceneError("track.segments", "must be an array of tables ([[track.segments]])")
+    segments = []
+    for n, entry in enumerate(segments_data, start=1):
+        where = f"track.segments[{n}]"
+        seg_kind = entry.get("kind")
+        if seg_kind not in SEGMENT_KEYS:
+            raise SceneError(f"{where}.kind", f"must be arc or line, got {seg_kind!r}")
+        _no_unknown(entry, SEGMENT_KEYS[seg_kind], where)
+        if seg_kind == "line":
+            segments.append(Segment("line", angle=to_mpf(_number(entry, "angle", where, required=True)),
+                                    length=to_mpf(_number(entry, "length", where, required=True))))
+        else:
+            side = entry.get("side")
+            if side not in ("concave", "convex"):
+                raise SceneError(f"{where}.side", f"must be concave or convex, got {side!r}")
+            segments.append(Segment("arc", radius=to_mpf(_number(entry, "radius", where, required=True)), side=side,
+                                    start=to_mpf(_number(entry, "start", where, required=True)),
+                                    end=to_mpf(_number(entry, "end", where, required=True))))
+    return ArcChainTrack.make(segments, _number(table, "start_x", "track", default="0"),
+                              _number(table, "start_y", "track", default="0"))
+
+
+def _path_scene(data: dict, track_table: dict, name: str, g) -> PathScene:
+    track = _path_track(track_table)
+    frame = _frame(_table(data, "frame", required=False))
+    kind = "curve" if isinstance(track, CurveTrack) else "arcs"
+    bodies_data = _bodies_list(data)
+    bodies, qs, dqs = [], [], []
+    for n, entry in enumerate(bodies_data, start=1):
+        field = f"bodies[{n}]"
+        _no_unknown(entry, PATH_BODY_KEYS[kind], field)
+        body = _make_body(entry, field)
+        track.check_body(body, field)
+        if kind == "curve":
+            q = _number(entry, "x", field, required=True)
+            dq = _number(entry, "dx", field, default="0")
+        elif "segment" in entry:
+            if "s" in entry or "ds" in entry:
+                raise SceneError(f"{field}.segment", "give s (and ds) or segment and angle (and dangle), not both")
+            segment = entry["segment"]
+            if isinstance(segment, bool) or not isinstance(segment, int):
+                raise SceneError(f"{field}.segment", f"must be a whole number, got {segment!r}")
+            q = track.coordinate_of(body, segment, _number(entry, "angle", field, required=True), field)
+            with workprec():
+                dq = to_mpf(_number(entry, "dangle", field, default="0")) * track.rate_scale(body, segment)
+        else:
+            if "angle" in entry or "dangle" in entry:
+                raise SceneError(f"{field}.angle", "angle needs segment")
+            q = _number(entry, "s", field, required=True)
+            dq = _number(entry, "ds", field, default="0")
+        bodies.append(body)
+        qs.append(q)
+        dqs.append(dq)
+    collision = _table(data, "collision", required=False)
+    _no_unknown(collision, COLLISION_KEYS, "collision")
+    law = _law(collision)
+    policy = collision.get("on_inconsistent", "newton")
+    run = _table(data, "run", required=False)
+    _no_unknown(run, RUN_KEYS, "run")
+    settings = RunSettings.make(_number(run, "t_end", "run", default="100"), run.get("max_collisions"))
+    return PathScene.make(track, bodies, qs, dqs, law=law,
+                          limiter_restitution=_number(track_table, "limiter_restitution", "track"),
+                          frame=frame, g=g, run=settings, name=name, on_inconsistent=policy)
+
+
+def _law(collision: dict):
+    law_name = collision.get("law", "hedrih")
+    if not isinstance(law_name, str):
+        raise SceneError("collision.law", "must be a string")
+    return make_law(law_name, _number(collision, "restitution", "collision", default="1"))
+
+
+def _bodies_list(data: dict) -> list:
+    bodies_data = data.get("bodies")
+    if bodies_data is None:
+        raise SceneError("bodies", "missing: give at least one [[bodies]] table")
+    if not isinstance(bodies_data, list) or not all(isinstance(b, dict) for b in bodies_data):
+        raise SceneError("bodies", "must be an array of tables ([[bodies]])")
+    if not bodies_data:
+        raise SceneError("bodies", "at least one body is required")
+    return bodies_data
 
 
 def _track(table: dict) -> CircleTrack:
@@ -113,6 +227,23 @@ def _track(table: dict) -> CircleTrack:
 
 def _body(entry: dict, field: str, track: CircleTrack):
     _no_unknown(entry, BODY_KEYS, field)
+    body = _make_body(entry, field)
+    track.check_body(body, field)
+    phi = _number(entry, "phi", field, required=True)
+    if "dphi" in entry and "omega" in entry:
+        raise SceneError(f"{field}.omega", "give dphi or omega, not both")
+    if "omega" in entry:
+        if body.is_particle:
+            raise SceneError(f"{field}.omega", "a particle does not roll: give dphi")
+        omega = _number(entry, "omega", field)
+        with workprec():
+            dphi = to_mpf(omega) / track.rolling_ratio(body)  # omega_P = (R - r)/r dphi (eq. 23)
+    else:
+        dphi = _number(entry, "dphi", field, required=True)
+    return body, phi, dphi
+
+
+def _make_body(entry: dict, field: str) -> Body:
     radius = _number(entry, "radius", field, required=("shape" not in entry or entry.get("shape") != "particle"), default="0")
     mass = _number(entry, "mass", field)
     density = _number(entry, "density", field)
@@ -129,19 +260,7 @@ def _body(entry: dict, field: str, track: CircleTrack):
         if not isinstance(shape, str):
             raise SceneError(f"{field}.shape", "must be a string")
         body = Body.of_shape(parse_shape(shape, f"{field}.shape"), radius, mass=mass, density=density, field=field)
-    track.check_body(body, field)
-    phi = _number(entry, "phi", field, required=True)
-    if "dphi" in entry and "omega" in entry:
-        raise SceneError(f"{field}.omega", "give dphi or omega, not both")
-    if "omega" in entry:
-        if body.is_particle:
-            raise SceneError(f"{field}.omega", "a particle does not roll: give dphi")
-        omega = _number(entry, "omega", field)
-        with workprec():
-            dphi = to_mpf(omega) / track.rolling_ratio(body)  # omega_P = (R - r)/r dphi (eq. 23)
-    else:
-        dphi = _number(entry, "dphi", field, required=True)
-    return body, phi, dphi
+    return body
 
 
 def _table(data: dict, key: str, *, required: bool) -> dict:

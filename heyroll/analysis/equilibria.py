@@ -1,0 +1,245 @@
+"""Relative equilibria of a rolling pendulum on a path track, and their bifurcations.
+
+The effective potential of a body in the rotating plane (section 5.3) is
+V(q) = m g y_C(q) - 1/2 m Omega^2 (x_C(q) - a)^2, so the equilibria are the
+roots of V'(q) = m [g y_C' - Omega^2 (x_C - a) x_C'] and, with the positive
+inertia kappa m F, a root is a centre where V'' > 0 and a saddle where V'' < 0.
+
+On a curve y = f(x), x_C' = 1 - r k and y_C' = f' (1 - r k) (k the
+curvature), so V' = m (1 - r k) h(x) with
+
+    h(x) = g f'(x) - Omega^2 (x - r f'/sqrt(1 + f'^2) - a),
+
+the paper's characteristic equation (97) without its factor 2 kappa / 3:
+the equilibria do not depend on the body's inertia at all (gravity and the
+centrifugal force are both proportional to m); 2 kappa/3 = 1 only for the
+thin disk the paper treats (see papers/ERRATA.md). On an arc chain, with q
+the arc length of the centre's path and alpha its tangent angle,
+h(s) = g sin(alpha) - Omega^2 (x_C - a) cos(alpha).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.bodies import Body
+from ..model.path_scene import PathScene, piece_index
+from ..model.paths import STATIONARY, ArcChainTrack, CurveTrack, Frame
+
+#: Samples per unit of the track's parameter range used to bracket roots.
+BRACKET_SAMPLES = 20001
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """A relative equilibrium: contact abscissa x, coordinate q, centre or saddle."""
+
+    x: float
+    q: float
+    type: str
+    #: h'(q): > 0 for a centre (V'' = m (1 - r k) h' on a curve, m h' on an arc chain)
+    stiffness: float
+    #: effective potential per unit mass, V/m, at the equilibrium (J/kg)
+    potential: float
+
+    def as_json(self) -> dict:
+        return {"x": self.x, "type": self.type}
+
+
+@dataclass(frozen=True)
+class EquilibriumProblem:
+    """h, h' and V/m of one body on one track in one frame, as numpy functions of q."""
+
+    track: CurveTrack | ArcChainTrack
+    body: Body
+    frame: Frame = STATIONARY
+    g: float = 9.81
+
+    def __post_init__(self):
+        self.track.check_body(self.body, "body")
+
+    @property
+    def domain(self) -> tuple[float, float]:
+        if isinstance(self.track, CurveTrack):
+            return float(self.track.x_min), float(self.track.x_max)
+        return 0.0, self.track.path_length(self.body)
+
+    def _chain(self, q):
+        pieces = self.track.pieces(self.body)
+        q = np.atleast_1d(np.asarray(q, dtype=float))
+        idx = piece_index(pieces, q)
+        alpha, c, x_c, y_c = (np.empty(q.shape) for _ in range(4))
+        for k, p in enumerate(pieces):
+            sel = idx == k
+            if np.any(sel):
+                alpha[sel] = p.alpha(q[sel])
+                c[sel] = p.c
+                x_c[sel], y_c[sel] = p.centre(q[sel])
+        return alpha, c, x_c, y_c
+
+    def h(self, q):
+        om2, a, g = float(self.frame.omega) ** 2, float(self.frame.axis_x), self.g
+        if isinstance(self.track, CurveTrack):
+            t, r = self.track, float(self.body.radius)
+            q = np.asarray(q, dtype=float)
+            d1 = t.numeric(t.df, q)
+            return g * d1 - om2 * (q - r * d1 / np.sqrt(1 + d1 * d1) - a)
+        alpha, _c, x_c, _y = self._chain(q)
+        return g * np.sin(alpha) - om2 * (x_c - a) * np.cos(alpha)
+
+    def dh(self, q):
+        om2, a, g = float(self.frame.omega) ** 2, float(self.frame.axis_x), self.g
+        if isinstance(self.track, CurveTrack):
+            t, r = self.track, float(self.body.radius)
+            q = np.asarray(q, dtype=float)
+            d1, d2 = t.numeric(t.df, q), t.numeric(t.d2f, q)
+            return g * d2 - om2 * (1 - r * d2 / (1 + d1 * d1) ** 1.5)
+        alpha, c, x_c, _y = self._chain(q)
+        return c * (g * np.cos(alpha) + om2 * (x_c - a) * np.sin(alpha)) - om2 * np.cos(alpha) ** 2
+
+    def centre(self, q):
+        if isinstance(self.track, CurveTrack):
+            return self.track.centre(np.asarray(q, dtype=float), float(self.body.radius))
+        _a, _c, x_c, y_c = self._chain(q)
+        return x_c, y_c
+
+    def contact_x(self, q):
+        """Abscissa of the contact point (the curve's x; on an arc chain x_C + r sin(alpha))."""
+        if isinstance(self.track, CurveTrack):
+            return np.asarray(q, dtype=float)
+        alpha, _c, x_c, _y = self._chain(q)
+        return x_c + float(self.body.radius) * np.sin(alpha)
+
+    def potential(self, q):
+        """V/m = g y_C - 1/2 Omega^2 (x_C - a)^2 (J/kg)."""
+        x_c, y_c = self.centre(q)
+        return self.g * y_c - 0.5 * float(self.frame.omega) ** 2 * (x_c - float(self.frame.axis_x)) ** 2
+
+    def with_omega(self, omega: float) -> "EquilibriumProblem":
+        return EquilibriumProblem(self.track, self.body, Frame.make(omega, self.frame.axis_x), self.g)
+
+
+def problem_of(scene: PathScene, body: int = 0) -> EquilibriumProblem:
+    return EquilibriumProblem(scene.track, scene.bodies[body], scene.frame, float(scene.g))
+
+
+def find_equilibria(problem: EquilibriumProblem, samples: int = BRACKET_SAMPLES) -> list[Equilibrium]:
+    """All sign-changing roots of h on the track, sorted by x, located to machine precision.
+
+    A grid brackets the roots (two roots closer than the grid step, which
+    only happens within ~step^2 of a bifurcation, show as none); bisection
+    then closes each bracket to adjacent doubles.
+    """
+    lo, hi = problem.domain
+    grid = np.linspace(lo, hi, samples)
+    if isinstance(problem.track, ArcChainTrack):
+        # junctions on the grid: h is continuous there but h' jumps
+        grid = np.unique(np.concatenate([grid, [p.s0 for p in problem.track.pieces(problem.body)]]))
+    values = problem.h(grid)
+    roots = []
+    for k in np.flatnonzero(values[:-1] * values[1:] <= 0):
+        a, b, fa = grid[k], grid[k + 1], values[k]
+        if fa == 0:
+            roots.append(a)
+            continue
+        if values[k + 1] == 0:
+            continue  # the next bracket starts on it
+        roots.append(_bisect(problem.h, a, b, fa))
+    out = []
+    for q in roots:
+        stiffness = float(np.atleast_1d(problem.dh(q))[0])
+        out.append(Equilibrium(
+            x=float(np.atleast_1d(problem.contact_x(q))[0]),
+            q=float(q), type="center" if stiffness > 0 else "saddle", stiffness=stiffness,
+            potential=float(np.atleast_1d(problem.potential(q))[0]),
+        ))
+    return sorted(out, key=lambda e: e.x)
+
+
+def _bisect(fn, a: float, b: float, fa: float) -> float:
+    for _ in range(200):
+        m = 0.5 * (a + b)
+        if m <= a or m >= b:
+            break
+        fm = float(np.atleast_1d(fn(m))[0])
+        if fm == 0:
+            return m
+        if (fm < 0) == (fa < 0):
+            a, fa = m, fm
+        else:
+            b = m
+    return a if abs(float(np.atleast_1d(fn(a))[0])) <= abs(float(np.atleast_1d(fn(b))[0])) else b
+
+
+@dataclass(frozen=True)
+class Bifurcation:
+    """Omega at which the set of equilibria changes: pairs are born or die there."""
+
+    omega: float
+    x: float
+    before: int
+    after: int
+
+
+def bifurcation_diagram(problem: EquilibriumProblem, omegas, samples: int = 4001):
+    """Equilibria at each Omega: a list of (omega, [Equilibrium])."""
+    return [(float(om), find_equilibria(problem.with_omega(float(om)), samples)) for om in omegas]
+
+
+def bifurcations(problem: EquilibriumProblem, omegas, samples: int = 4001, refine: int = 50) -> list[Bifurcation]:
+    """Omegas where the number of equilibria changes, refined by bisection on Omega."""
+    diagram = bifurcation_diagram(problem, omegas, samples)
+    out = []
+    for (o1, e1), (o2, e2) in zip(diagram, diagram[1:]):
+        if len(e1) == len(e2):
+            continue
+        a, b, na = o1, o2, len(e1)
+        for _ in range(refine):
+            m = 0.5 * (a + b)
+            if len(find_equilibria(problem.with_omega(m), samples)) == na:
+                a = m
+            else:
+                b = m
+        born = find_equilibria(problem.with_omega(b), samples)
+        old = find_equilibria(problem.with_omega(a), samples)
+        where = _new_position(old, born)
+        omega = 0.5 * (a + b)
+        if isinstance(problem.track, CurveTrack):
+            where, omega = _fold(problem, where, omega)
+        out.append(Bifurcation(omega=omega, x=where, before=len(e1), after=len(e2)))
+    return out
+
+
+def _fold(problem: EquilibriumProblem, x: float, omega: float) -> tuple[float, float]:
+    """Polish a bifurcation on a curve: h = 0 and h_x = 0 in (x, w = Omega^2).
+
+    Gauss-Newton with the least-squares step, so the symmetric pitchfork
+    (where h_xx = 0 and x_C = a make the Jacobian singular) converges too.
+    """
+    t, r, g, a = problem.track, float(problem.body.radius), problem.g, float(problem.frame.axis_x)
+    w = omega * omega
+    for _ in range(50):
+        d1, d2, d3 = (float(t.numeric(node, x)) for node in (t.df, t.d2f, t.d3f))
+        s = 1 + d1 * d1
+        x_c = x - r * d1 / np.sqrt(s)
+        dx_c = 1 - r * d2 / s**1.5
+        ddx_c = -r * (d3 / s**1.5 - 3 * d1 * d2 * d2 / s**2.5)
+        F = np.array([g * d1 - w * (x_c - a), g * d2 - w * dx_c])
+        J = np.array([[g * d2 - w * dx_c, -(x_c - a)], [g * d3 - w * ddx_c, -dx_c]])
+        step = np.linalg.lstsq(J, -F, rcond=None)[0]
+        x, w = x + step[0], w + step[1]
+        if abs(step[0]) <= 1e-16 * max(1, abs(x)) and abs(step[1]) <= 1e-16 * w:
+            break
+    return float(x), float(np.sqrt(w))
+
+
+def _new_position(old: list[Equilibrium], new: list[Equilibrium]) -> float:
+    """x of the equilibrium farthest from any in the other set (where the change happens)."""
+    a, b = (old, new) if len(new) > len(old) else (new, old)
+    if not a:
+        return float(np.mean([e.x for e in b]))
+    xs = np.array([e.x for e in a])
+    gaps = [min(abs(xs - e.x)) for e in b]
+    return b[int(np.argmax(gaps))].x

@@ -1,0 +1,195 @@
+"""Figures for path tracks (paper sections 5-6).
+
+* :func:`portrait_figure`: the complete phase portrait of one body (level
+  curves of the first integral, separatrices through the saddles, centres,
+  limiters, junctions) with integrated trajectories drawn over it (Figs. 14-16, 19).
+* :func:`energy_surface_figure`: the total-mechanical-energy surface H(q, q') (Fig. 16b).
+* :func:`bifurcation_figure`: equilibria against Omega (section 5.3's theorem).
+* :func:`branches_figure` / :func:`body_energy_figure`: a multi-body run's phase
+  trajectory branches with the jumps at collisions, and each body's first
+  integral through the collisions (Figs. 19-20, energy transfer).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ..analysis.equilibria import EquilibriumProblem, bifurcation_diagram, find_equilibria, problem_of
+from ..model.path_scene import PathScene
+from ..model.paths import ArcChainTrack
+from ..model.scene import RunSettings
+from ..simulation.path_driver import PathResult, body_energy, simulate_path, speed_factor
+from .figures import _save
+
+GRID = 500
+
+
+@dataclass(frozen=True)
+class PortraitCheck:
+    """Integrated trajectories drawn on a portrait: worst relative drift of H."""
+
+    trajectories: int
+    worst_relative_drift: float
+    duration: float
+
+
+def first_integral_grid(scene: PathScene, body: int, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """H per unit mass on the (q, v) grid: 1/2 kappa F v^2 + V/m."""
+    Q, Vv = np.meshgrid(q, v)
+    m = float(scene.bodies[body].mass)
+    return body_energy(scene, body, Q.ravel(), Vv.ravel()).reshape(Q.shape) / m
+
+
+def _velocity_range(scene: PathScene, body: int, q: np.ndarray, problem: EquilibriumProblem) -> float:
+    V = problem.potential(q)
+    F = speed_factor(scene, body, q) ** 2
+    kappa = float(scene.bodies[body].kappa)
+    return 1.15 * float(np.sqrt(2 * (V.max() - V.min()) / (kappa * F.min())))
+
+
+def _junctions(scene: PathScene, body: int) -> list[float]:
+    if isinstance(scene.track, ArcChainTrack):
+        return [p.s0 for p in scene.track.pieces(scene.bodies[body])[1:]]
+    return []
+
+
+def portrait_figure(scene: PathScene, path, *, body: int = 0, trajectories: int = 4,
+                    duration: float | None = None) -> PortraitCheck:
+    problem = problem_of(scene, body)
+    lo, hi = problem.domain
+    q = np.linspace(lo, hi, GRID)
+    vmax = _velocity_range(scene, body, q, problem)
+    v = np.linspace(-vmax, vmax, GRID)
+    H = first_integral_grid(scene, body, q, v)
+    eq = find_equilibria(problem)
+    fig = Figure(figsize=(10, 6))
+    ax = fig.add_subplot()
+    levels = np.linspace(np.nanmin(H), np.nanpercentile(H, 70), 28)
+    ax.contour(q, v, H, levels=levels, colors="0.6", linewidths=0.6)
+    saddle_levels = sorted({e.potential for e in eq if e.type == "saddle"})
+    if saddle_levels:
+        ax.contour(q, v, H, levels=saddle_levels, colors="tab:red", linewidths=1.4)
+    for e in eq:
+        ax.plot(e.q, 0, "o" if e.type == "center" else "x", color="tab:green" if e.type == "center" else "tab:red",
+                ms=8, mew=2)
+    for x in (lo, hi):
+        ax.axvline(x, color="k", lw=2)
+    for s in _junctions(scene, body):
+        ax.axvline(s, color="0.3", lw=0.8, ls="--")
+    check = _overlay(scene, body, problem, eq, ax, duration)
+    coord = "x (contact abscissa) [m]" if scene.coordinate == "x" else "s (arc length of the centre's path) [m]"
+    ax.set_xlabel(coord)
+    ax.set_ylabel(f"d{scene.coordinate}/dt [m/s]")
+    omega = float(scene.frame.omega)
+    ax.set_title(f"{scene.name}: phase portrait of body {body + 1}, Omega = {omega:g} rad/s "
+                 f"(red: separatrices, o centres, x saddles, black: limiters"
+                 f"{', dashed: junctions' if _junctions(scene, body) else ''}; colour: integrated)", fontsize=8)
+    ax.set_ylim(-vmax, vmax)
+    _save(fig, path)
+    return check
+
+
+def _overlay(scene, body, problem, eq, ax, duration) -> PortraitCheck:
+    """Integrate a few trajectories and draw them; measure H along each."""
+    lo, hi = problem.domain
+    centres = [e for e in eq if e.type == "center"]
+    starts = [c.q + 0.4 * (min([s.q for s in eq if s.q > c.q] + [hi]) - c.q) for c in centres]
+    saddles = [e for e in eq if e.type == "saddle"]
+    if saddles:
+        starts.append(saddles[0].q + 1e-3 * (hi - lo))
+    starts = starts[:4] or [lo + 0.3 * (hi - lo)]
+    worst, T = 0.0, duration or 4 * float(np.sqrt((hi - lo) / problem.g)) * 3
+    bodies = (scene.bodies[body],)
+    for k, q0 in enumerate(starts):
+        single = PathScene.make(scene.track, bodies, [q0], [0], law=scene.law,
+                                limiter_restitution=1, frame=scene.frame, g=scene.g, run=RunSettings.make(T),
+                                name=scene.name)
+        res = simulate_path(single, keep_branches=True)
+        t, X = res.sample(3000)
+        H = body_energy(single, 0, X[:, 0].astype(float), X[:, 1].astype(float))
+        scale = max(abs(res.energy_initial), float(single.bodies[0].mass) * problem.g * (hi - lo))
+        worst = max(worst, float(np.max(np.abs(H - res.energy_initial))) / scale)
+        ax.plot(X[:, 0].astype(float), X[:, 1].astype(float), lw=0.9, color=f"C{k}")
+    return PortraitCheck(trajectories=len(starts), worst_relative_drift=worst, duration=T)
+
+
+def energy_surface_figure(scene: PathScene, path, *, body: int = 0) -> None:
+    problem = problem_of(scene, body)
+    lo, hi = problem.domain
+    q = np.linspace(lo, hi, 160)
+    vmax = _velocity_range(scene, body, q, problem)
+    v = np.linspace(-vmax, vmax, 120)
+    H = first_integral_grid(scene, body, q, v)
+    fig = Figure(figsize=(9, 6))
+    ax = fig.add_subplot(projection="3d")
+    Q, Vv = np.meshgrid(q, v)
+    ax.plot_surface(Q, Vv, H, cmap="viridis", linewidth=0, antialiased=True, alpha=0.9)
+    ax.set_xlabel(scene.coordinate)
+    ax.set_ylabel(f"d{scene.coordinate}/dt")
+    ax.set_zlabel("H / m [J/kg]")
+    ax.set_title(f"{scene.name}: first integral (total mechanical energy in the rotating plane) of body {body + 1}",
+                 fontsize=8)
+    _save(fig, path)
+
+
+def bifurcation_figure(scene: PathScene, path, omegas, *, body: int = 0) -> list:
+    problem = problem_of(scene, body)
+    diagram = bifurcation_diagram(problem, omegas)
+    fig = Figure(figsize=(8, 5))
+    ax = fig.add_subplot()
+    for kind, colour, marker in (("center", "tab:green", "."), ("saddle", "tab:red", "x")):
+        pts = [(om, e.x) for om, eq in diagram for e in eq if e.type == kind]
+        if pts:
+            ax.plot(*zip(*pts), marker, color=colour, ms=3, ls="none", label=kind)
+    ax.axvline(float(scene.frame.omega), color="0.5", ls=":", label="scene's Omega")
+    ax.set_xlabel("Omega [rad/s]")
+    ax.set_ylabel("x of the equilibrium's contact point [m]")
+    ax.legend(fontsize=8)
+    ax.set_title(f"{scene.name}: relative equilibria of body {body + 1} against Omega", fontsize=9)
+    _save(fig, path)
+    return diagram
+
+
+def branches_figure(result: PathResult, path, *, max_points: int = 4000) -> None:
+    scene = result.scene
+    t, X = result.sample(max_points)
+    times = np.array([c["t"] for c in result.collisions])
+    n = len(scene.bodies)
+    fig = Figure(figsize=(9, 3.2 * n))
+    for b in range(n):
+        ax = fig.add_subplot(n, 1, b + 1)
+        q, v = X[:, 2 * b].astype(float), X[:, 2 * b + 1].astype(float)
+        seg = np.searchsorted(times, t, side="right")
+        for k in np.unique(seg):
+            sel = seg == k
+            ax.plot(q[sel], v[sel], lw=0.8, color=f"C{k % 10}")
+        for c in result.collisions:
+            if b + 1 in (c["i"], c["j"]):
+                side = "i" if c["i"] == b + 1 else "j"
+                ax.plot([c[f"q_{side}"]] * 2, [c[f"v_{side}_before"], c[f"v_{side}_after"]], "k:", lw=0.8)
+        ax.set_ylabel(f"body {b + 1}: d{scene.coordinate}/dt")
+    ax.set_xlabel(scene.coordinate)
+    fig.suptitle(f"{scene.name}: phase trajectory branches (colour changes at each collision; dotted: jumps)",
+                 fontsize=9)
+    _save(fig, path)
+
+
+def body_energy_figure(result: PathResult, path, *, max_points: int = 4000) -> None:
+    scene = result.scene
+    t, X = result.sample(max_points)
+    fig = Figure(figsize=(9, 4))
+    ax = fig.add_subplot()
+    total = 0
+    for b in range(len(scene.bodies)):
+        H = body_energy(scene, b, X[:, 2 * b].astype(float), X[:, 2 * b + 1].astype(float))
+        total = total + H
+        ax.plot(t, H, lw=0.9, label=f"body {b + 1}")
+    ax.plot(t, total, "k", lw=1.2, label="sum")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("first integral H_i [J]")
+    ax.legend(fontsize=8)
+    ax.set_title(f"{scene.name}: energy transfer between the bodies at collisions", fontsize=9)
+    _save(fig, path)

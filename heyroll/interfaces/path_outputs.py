@@ -1,0 +1,89 @@
+"""Files of runs and analyses on path tracks (arc chains, curves, rotating plane).
+
+``write_path_run``: collisions.csv, limiters.csv, summary.json and figures.
+``write_portrait``: portrait.png, energy_surface.png, bifurcation.png and
+portrait.json (equilibria, bifurcations, the check of the portrait against
+integrated trajectories). Every file is written atomically.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis.equilibria import bifurcations, find_equilibria, problem_of
+from ..model.path_scene import PathScene
+from ..simulation.path_driver import COLLISION_COLUMNS, LIMITER_COLUMNS, PathResult
+from .outputs import atomic_write_text, versions
+
+INTEGER = {"n", "i", "j", "law_flag", "body"}
+
+
+def rows_csv(rows: list[dict], columns) -> str:
+    lines = [",".join(columns)]
+    for row in rows:
+        lines.append(",".join(str(row[c]) if c in INTEGER or isinstance(row[c], str) else f"{row[c]:.17g}"
+                              for c in columns))
+    return "\n".join(lines) + "\n"
+
+
+def write_path_run(result: PathResult, out_dir: Path, *, scene_source: str, figures: bool = True) -> dict:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out_dir / "collisions.csv", rows_csv(result.collisions, COLLISION_COLUMNS))
+    atomic_write_text(out_dir / "limiters.csv", rows_csv(result.limiter_impacts, LIMITER_COLUMNS))
+    files = {"collisions": "collisions.csv", "limiters": "limiters.csv", "summary": "summary.json"}
+    if figures and result.branches:
+        from .path_figures import body_energy_figure, branches_figure
+
+        branches_figure(result, out_dir / "phase_branches.png")
+        body_energy_figure(result, out_dir / "energy.png")
+        files.update(phase_branches="phase_branches.png", energy="energy.png")
+    summary = result.summary()
+    summary.update(scene_source=scene_source, track=result.scene.track.kind,
+                   coordinate=result.scene.coordinate, omega=float(result.scene.frame.omega),
+                   axis_x=float(result.scene.frame.axis_x), files=files, versions=versions(),
+                   state_final=[float(x) for x in result.state])
+    atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2, allow_nan=True) + "\n")
+    return summary
+
+
+def equilibria_list(scene: PathScene, body: int = 0) -> list:
+    return find_equilibria(problem_of(scene, body))
+
+
+def default_omegas(scene: PathScene) -> np.ndarray:
+    """0 to twice the largest of the scene's Omega and sqrt(g / smallest centre-path radius)."""
+    om = float(scene.frame.omega)
+    return np.linspace(0.0, 2 * max(om, 3.0), 121)
+
+
+def write_portrait(scene: PathScene, out_dir: Path, *, scene_source: str, body: int = 0, omegas=None) -> dict:
+    from .path_figures import bifurcation_figure, energy_surface_figure, portrait_figure
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    omegas = default_omegas(scene) if omegas is None else omegas
+    check = portrait_figure(scene, out_dir / "portrait.png", body=body)
+    energy_surface_figure(scene, out_dir / "energy_surface.png", body=body)
+    bifurcation_figure(scene, out_dir / "bifurcation.png", omegas, body=body)
+    problem = problem_of(scene, body)
+    eq = find_equilibria(problem)
+    bif = bifurcations(problem, omegas)
+    data = {
+        "scene": scene.name, "scene_source": scene_source, "body": body + 1,
+        "omega": float(scene.frame.omega), "axis_x": float(scene.frame.axis_x),
+        "equilibria": [{"x": e.x, "q": e.q, "type": e.type, "stiffness": e.stiffness,
+                        "potential_per_mass": e.potential} for e in eq],
+        "separatrix_levels_per_mass": sorted({e.potential for e in eq if e.type == "saddle"}),
+        "bifurcations": [{"omega": b.omega, "x": b.x, "equilibria_before": b.before,
+                          "equilibria_after": b.after} for b in bif],
+        "omega_range": [float(omegas[0]), float(omegas[-1])],
+        "check": {"integrated_trajectories": check.trajectories, "duration_s": check.duration,
+                  "worst_relative_first_integral_drift": check.worst_relative_drift},
+        "files": {"portrait": "portrait.png", "energy_surface": "energy_surface.png",
+                  "bifurcation": "bifurcation.png"},
+        "versions": versions(),
+    }
+    atomic_write_text(out_dir / "portrait.json", json.dumps(data, indent=2) + "\n")
+    return data

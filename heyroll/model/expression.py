@@ -1,0 +1,328 @@
+"""Track shapes y = f(x) written as text in a scene file.
+
+A small whitelist parser: numbers, the variable ``x``, ``+ - * / **``,
+parentheses and the functions ``sin cos exp sqrt``. Scene text is never
+passed to ``eval``; it becomes a tree of frozen nodes that can be
+
+* evaluated with any numeric library (numpy, mpmath, or heyoka's expression
+  system: the caller passes the functions), and
+* differentiated symbolically, so f', f'' and f''' are exact expressions too.
+
+Numbers keep their decimal text, so an mpmath evaluation sees 0.1 as 1/10
+to working precision and not as the nearest double.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from decimal import Decimal
+from typing import Callable, Mapping, Union
+
+from ..errors import SceneError
+
+FUNCTIONS = ("sin", "cos", "exp", "sqrt")
+
+_TOKEN = re.compile(
+    r"\s*(?:(?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)|(?P<name>[A-Za-z_]\w*)|(?P<op>\*\*|[-+*/()]))"
+)
+
+
+@dataclass(frozen=True)
+class Num:
+    text: str
+
+
+@dataclass(frozen=True)
+class Var:
+    pass
+
+
+@dataclass(frozen=True)
+class Neg:
+    arg: "Node"
+
+
+@dataclass(frozen=True)
+class Bin:
+    op: str
+    left: "Node"
+    right: "Node"
+
+
+@dataclass(frozen=True)
+class Call:
+    fn: str
+    arg: "Node"
+
+
+Node = Union[Num, Var, Neg, Bin, Call]
+X = Var()
+ZERO, ONE, TWO = Num("0"), Num("1"), Num("2")
+
+
+class ExpressionError(SceneError):
+    """A track expression breaks the grammar."""
+
+
+def parse(text: str, field: str = "track.y") -> Node:
+    """Parse ``text`` into an expression tree; raises ExpressionError (a SceneError)."""
+    if not isinstance(text, str):
+        raise ExpressionError(field, f"must be a string expression in x, got {text!r}")
+    tokens = _tokenize(text, field)
+    parser = _Parser(tokens, field, text)
+    node = parser.expression()
+    if parser.pos != len(tokens):
+        raise ExpressionError(field, f"unexpected {tokens[parser.pos][1]!r} in {text!r}")
+    return node
+
+
+def _tokenize(text: str, field: str) -> list[tuple[str, str]]:
+    tokens, pos = [], 0
+    text = text.rstrip()
+    if not text:
+        raise ExpressionError(field, "empty expression: give y as a function of x, e.g. \"0.5*x**2\"")
+    while pos < len(text):
+        m = _TOKEN.match(text, pos)
+        if not m or m.end() == pos:
+            raise ExpressionError(field, f"character {text[pos]!r} at position {pos} is not allowed "
+                                  "(numbers, x, + - * / **, parentheses, sin cos exp sqrt)")
+        kind = m.lastgroup
+        value = m.group(kind)
+        if kind == "name" and value != "x" and value not in FUNCTIONS:
+            raise ExpressionError(field, f"unknown name {value!r}; allowed: x, {', '.join(FUNCTIONS)}")
+        tokens.append((kind, value))
+        pos = m.end()
+    return tokens
+
+
+class _Parser:
+    """Recursive descent: expr := term (+|- term)*; term := unary (*|/ unary)*;
+    unary := (+|-) unary | power; power := atom (** unary)?  (right-assoc)."""
+
+    def __init__(self, tokens, field, text):
+        self.tokens, self.pos, self.field, self.text = tokens, 0, field, text
+
+    def peek(self):
+        return self.tokens[self.pos] if self.pos < len(self.tokens) else (None, None)
+
+    def take(self, value=None):
+        kind, tok = self.peek()
+        if tok is None:
+            raise ExpressionError(self.field, f"expression {self.text!r} ends too early")
+        if value is not None and tok != value:
+            raise ExpressionError(self.field, f"expected {value!r}, got {tok!r} in {self.text!r}")
+        self.pos += 1
+        return kind, tok
+
+    def expression(self):
+        node = self.term()
+        while self.peek()[1] in ("+", "-"):
+            _, op = self.take()
+            node = Bin(op, node, self.term())
+        return node
+
+    def term(self):
+        node = self.unary()
+        while self.peek()[1] in ("*", "/"):
+            _, op = self.take()
+            node = Bin(op, node, self.unary())
+        return node
+
+    def unary(self):
+        if self.peek()[1] in ("+", "-"):
+            _, op = self.take()
+            arg = self.unary()
+            return Neg(arg) if op == "-" else arg
+        return self.power()
+
+    def power(self):
+        base = self.atom()
+        if self.peek()[1] == "**":
+            self.take()
+            return Bin("**", base, self.unary())
+        return base
+
+    def atom(self):
+        kind, tok = self.take()
+        if kind == "num":
+            return Num(tok)
+        if tok == "x":
+            return X
+        if kind == "name":
+            self.take("(")
+            arg = self.expression()
+            self.take(")")
+            return Call(tok, arg)
+        if tok == "(":
+            node = self.expression()
+            self.take(")")
+            return node
+        raise ExpressionError(self.field, f"unexpected {tok!r} in {self.text!r}")
+
+
+# ---------------------------------------------------------------- evaluation
+
+@dataclass(frozen=True)
+class Library:
+    """How to evaluate a tree: a number constructor and the four functions."""
+
+    number: Callable[[str], object]
+    functions: Mapping[str, Callable]
+
+
+def evaluate(node: Node, x, lib: Library):
+    """Value of ``node`` at ``x`` with the library's numbers and functions."""
+    if isinstance(node, Num):
+        return lib.number(node.text)
+    if isinstance(node, Var):
+        return x
+    if isinstance(node, Neg):
+        return -evaluate(node.arg, x, lib)
+    if isinstance(node, Call):
+        return lib.functions[node.fn](evaluate(node.arg, x, lib))
+    a, b = evaluate(node.left, x, lib), evaluate(node.right, x, lib)
+    if node.op == "+":
+        return a + b
+    if node.op == "-":
+        return a - b
+    if node.op == "*":
+        return a * b
+    if node.op == "/":
+        return a / b
+    if isinstance(node.right, Num) and _is_whole(node.right.text):
+        return a ** int(Decimal(node.right.text))  # whole powers stay exact (x**2 == x*x)
+    return a**b
+
+
+def _is_whole(text: str) -> bool:
+    d = Decimal(text)
+    return d == d.to_integral_value() and abs(d) <= 64
+
+
+def to_text(node: Node) -> str:
+    """A fully parenthesized text form (round-trips through :func:`parse`)."""
+    if isinstance(node, Num):
+        return node.text
+    if isinstance(node, Var):
+        return "x"
+    if isinstance(node, Neg):
+        return f"(-{to_text(node.arg)})"
+    if isinstance(node, Call):
+        return f"{node.fn}({to_text(node.arg)})"
+    return f"({to_text(node.left)} {node.op} {to_text(node.right)})"
+
+
+# ------------------------------------------------------------ differentiation
+
+def derivative(node: Node) -> Node:
+    """d node / dx, simplified only where a factor is exactly 0 or 1."""
+    if isinstance(node, Num):
+        return ZERO
+    if isinstance(node, Var):
+        return ONE
+    if isinstance(node, Neg):
+        return _neg(derivative(node.arg))
+    if isinstance(node, Call):
+        u, du = node.arg, derivative(node.arg)
+        outer = {
+            "sin": lambda: Call("cos", u),
+            "cos": lambda: _neg(Call("sin", u)),
+            "exp": lambda: node,
+            "sqrt": lambda: _div(ONE, _mul(TWO, node)),
+        }[node.fn]()
+        return _mul(outer, du)
+    a, b = node.left, node.right
+    da, db = derivative(a), derivative(b)
+    if node.op == "+":
+        return _add(da, db)
+    if node.op == "-":
+        return _sub(da, db)
+    if node.op == "*":
+        return _add(_mul(da, b), _mul(a, db))
+    if node.op == "/":
+        return _div(_sub(_mul(da, b), _mul(a, db)), _mul(b, b))
+    # a ** b
+    if _is_zero(db):
+        if isinstance(b, Num):
+            lowered = Num(str(Decimal(b.text) - 1))
+            return _mul(_mul(b, _pow(a, lowered)), da)
+        return _mul(_mul(b, _pow(a, _sub(b, ONE))), da)
+    # general power: d(a^b) = a^b (b' ln a + b a'/a); ln is not in the grammar,
+    # so only constant exponents are differentiable
+    raise ExpressionError("track.y", "x may appear in an exponent only through exp(...)")
+
+
+def _is_zero(n):
+    return isinstance(n, Num) and Decimal(n.text) == 0
+
+
+def _is_one(n):
+    return isinstance(n, Num) and Decimal(n.text) == 1
+
+
+def _neg(a):
+    return ZERO if _is_zero(a) else Neg(a)
+
+
+def _add(a, b):
+    if _is_zero(a):
+        return b
+    if _is_zero(b):
+        return a
+    return Bin("+", a, b)
+
+
+def _sub(a, b):
+    if _is_zero(b):
+        return a
+    if _is_zero(a):
+        return Neg(b)
+    return Bin("-", a, b)
+
+
+def _mul(a, b):
+    if _is_zero(a) or _is_zero(b):
+        return ZERO
+    if _is_one(a):
+        return b
+    if _is_one(b):
+        return a
+    return Bin("*", a, b)
+
+
+def _div(a, b):
+    if _is_zero(a):
+        return ZERO
+    if _is_one(b):
+        return a
+    return Bin("/", a, b)
+
+
+def _pow(a, b):
+    if _is_one(b):
+        return a
+    if _is_zero(b):
+        return ONE
+    return Bin("**", a, b)
+
+
+def contains_x(node: Node) -> bool:
+    if isinstance(node, Var):
+        return True
+    if isinstance(node, Num):
+        return False
+    if isinstance(node, (Neg, Call)):
+        return contains_x(node.arg)
+    return contains_x(node.left) or contains_x(node.right)
+
+
+def check_differentiable(node: Node, field: str) -> None:
+    """Reject x in an exponent (the grammar has no log to differentiate it)."""
+    if isinstance(node, Bin):
+        if node.op == "**" and contains_x(node.right):
+            raise ExpressionError(field, "x may not appear in an exponent (use exp(...))")
+        check_differentiable(node.left, field)
+        check_differentiable(node.right, field)
+    elif isinstance(node, (Neg, Call)):
+        check_differentiable(node.arg, field)

@@ -1,0 +1,433 @@
+"""Path tracks (paper sections 5-6): arc chains, curves y = f(x), rotating plane."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import mpmath
+import numpy as np
+import pytest
+
+import heyroll
+from heyroll.analysis.equilibria import EquilibriumProblem, bifurcations, find_equilibria, problem_of
+from heyroll.errors import SceneError
+from heyroll.interfaces.cli import main
+from heyroll.interfaces.scene_file import default_scene, default_scene_text, parse_scene
+from heyroll.model import expression as ex
+from heyroll.model.bodies import Body
+from heyroll.model.path_scene import PathScene
+from heyroll.model.paths import MPMATH, ArcChainTrack, CurveTrack, Frame, Segment
+from heyroll.model.scene import RunSettings, Scene
+from heyroll.model.tracks import CircleTrack
+from heyroll.reference.equilibria import equilibrium_roots
+from heyroll.simulation.path_driver import body_energy, simulate_path, total_energy
+
+README_CURVE = """
+[track]
+type = "curve"
+y = "0.5*x**2*(x**2 - 1)**2"    # metres, x in metres
+x_min = -1.6
+x_max = 1.6
+
+[frame]
+omega = 3.0                      # rad/s, rotation of the vertical plane about a vertical axis
+axis_x = 0.0                     # where that axis crosses the x axis (eccentricity)
+
+[[bodies]]
+shape = "disk"
+radius = 0.05
+mass = 1.0
+x = 0.3                          # abscissa of the contact point
+dx = 0.0
+"""
+
+#: The paper's three example curves (section 5.3), with our choice of constants.
+PAPER_CURVES = {
+    "k x^2 (x^2 - a^2)^2": "0.5*x**2*(x**2 - 1)**2",
+    "k x^2 (x^2 - a^2)^2 (x^2 - b^2)": "0.02*x**2*(x**2 - 1)**2*(x**2 - 4)",
+    "-k x^2 (x^2 - a^2) [c^4 - (x^2 - b^2)^2]": "-0.1*x**2*(x**2 - 1)*(16 - (x**2 - 4)**2)",
+}
+
+DISK = Body.of_shape("disk", "0.05", mass="1")
+
+
+# ------------------------------------------------------------------ expressions
+
+@pytest.mark.parametrize("text", ["0.5*x**2*(x**2 - 1)**2", "sin(x) + cos(2*x)", "exp(-x**2)", "sqrt(1 + x**2)",
+                                  "-x", "2**3*x", "1e-1*x**2", ".5*x"])
+def test_expression_derivatives_agree_with_mpmath_numerical_differentiation(text):
+    node = ex.parse(text)
+    for x in (mpmath.mpf("-0.7"), mpmath.mpf("0.3"), mpmath.mpf("1.1")):
+        with mpmath.workdps(40):
+            f = lambda t: ex.evaluate(node, t, MPMATH)  # noqa: E731
+            for order, d in ((1, ex.derivative(node)), (2, ex.derivative(ex.derivative(node)))):
+                exact = mpmath.diff(f, x, order)
+                mine = ex.evaluate(d, x, MPMATH)
+                assert abs(mine - exact) <= mpmath.mpf(10) ** -30 * max(1, abs(exact))
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("__import__('os')", "unknown name"), ("x.real", "not allowed"), ("a*x", "unknown name"),
+    ("2**x", "exponent"), ("(x + 1", "ends too early"), ("x + ", "ends too early"), ("", "empty"),
+    ("x; 1", "not allowed"), ("log(x)", "unknown name"), ("x)", "unexpected"),
+])
+def test_bad_expressions_are_one_line_scene_errors(text, fragment):
+    with pytest.raises(SceneError) as info:
+        CurveTrack.make(text, -1, 1)
+    assert fragment in str(info.value) and "\n" not in str(info.value)
+    assert info.value.field == "track.y"
+
+
+def test_expression_text_round_trips():
+    node = ex.parse("-0.5*x**2*(x**2 - 1)*(16 - (x**2 - 4)**2)")
+    assert ex.parse(ex.to_text(node)) == node
+
+
+# ----------------------------------------------------------------- geometry
+
+def test_curve_rejects_a_body_larger_than_a_hollow():
+    # y = 5 x^2: radius of curvature 1/10 m at the bottom
+    with pytest.raises(SceneError, match=r"bodies\[1\]\.radius.*radius of curvature falls to 0\.1"):
+        PathScene.make(CurveTrack.make("5*x**2", -1, 1), [Body.of_shape("disk", "0.2", mass=1)], [0.5], [0])
+
+
+def test_curve_that_is_not_finite_on_its_range_is_rejected():
+    with pytest.raises(SceneError, match="track.y: y is not finite"):
+        CurveTrack.make("sqrt(x)", -1, 1)
+
+
+def test_arc_chain_rejects_tangents_that_do_not_match():
+    segs = [Segment("arc", mpmath.mpf(1), "concave", -mpmath.pi / 2, mpmath.mpf("0.5")),
+            Segment("line", angle=mpmath.mpf("0.6"), length=mpmath.mpf(1))]
+    with pytest.raises(SceneError, match=r"segments\[2\]\.start: tangent does not match"):
+        ArcChainTrack.make(segs)
+
+
+def test_arc_chain_rejects_a_body_larger_than_a_concave_arc():
+    track = ArcChainTrack.three_arcs("0.1", "0.5", "0.2")
+    with pytest.raises(SceneError, match=r"bodies\[1\]\.radius: must be < the radius of concave segment 1"):
+        PathScene.make(track, [Body.of_shape("disk", "0.1", mass=1)], [0.05], [0])
+
+
+def test_three_arcs_geometry_is_continuous_and_has_the_paper_central_angles():
+    R, R0, beta = mpmath.mpf(1), mpmath.mpf("0.5"), mpmath.mpf("0.2")
+    track = ArcChainTrack.three_arcs(R, R0, beta)
+    spans = [s.end - s.start for s in track.segments]
+    assert [float(x) for x in spans] == pytest.approx(
+        [float(3 * mpmath.pi / 2 - beta), float(mpmath.pi - 2 * beta), float(3 * mpmath.pi / 2 - beta)], rel=1e-15)
+    pieces = track.pieces(DISK)
+    for a, b in zip(pieces, pieces[1:]):
+        xa, ya = a.centre(a.s1)
+        xb, yb = b.centre(b.s0)
+        assert abs(xa - xb) < 1e-15 and abs(ya - yb) < 1e-15
+        assert abs(math.remainder(a.alpha(a.s1) - b.alpha0, 2 * math.pi)) < 1e-15
+
+
+def test_stationary_circle_scene_is_unchanged_by_an_empty_frame():
+    text = default_scene_text() + "\n[frame]\nomega = 0\n"
+    scene = parse_scene(text)
+    assert isinstance(scene, Scene) and scene == default_scene()
+
+
+def test_rotating_circle_is_refused_with_a_pointer_to_arcs():
+    text = default_scene_text() + "\n[frame]\nomega = 1\n"
+    with pytest.raises(SceneError, match="frame.omega: a rotating plane needs track type curve"):
+        parse_scene(text)
+
+
+# ------------------------------------------------------- events, analytic cases
+
+def incline_chain(theta: float, length: float):
+    """A straight line going down to the right at theta, then a concave arc that
+    turns it up: limiter at the top of the line, junction at its foot."""
+    a = mpmath.mpf(-theta)
+    return ArcChainTrack.make([Segment("line", angle=a, length=mpmath.mpf(length)),
+                               Segment("arc", mpmath.mpf(2), "concave", a, mpmath.mpf("1.0"))])
+
+
+def test_junction_crossing_is_located_to_machine_precision():
+    theta, L, s0 = 0.3, 2.0, 0.5
+    ball = Body.of_shape("solid_sphere", "0.1", mass=1)
+    scene = PathScene.make(incline_chain(theta, L), [ball], [s0], [0], run=RunSettings.make(3))
+    result = simulate_path(scene)
+    t_junction = result.junctions[0]["t"]
+    with mpmath.workdps(40):
+        acc = mpmath.mpf("9.81") * mpmath.sin(mpmath.mpf(theta)) / mpmath.mpf(7) * 5
+        exact = mpmath.sqrt(2 * (mpmath.mpf(L) - mpmath.mpf(s0)) / acc)
+    assert abs(t_junction - float(exact)) <= 4 * np.finfo(float).eps * float(exact)
+
+
+def test_limiter_impact_is_located_to_machine_precision_and_reverses_with_k():
+    theta, s0 = 0.3, 1.5
+    ball = Body.of_shape("solid_sphere", "0.1", mass=1)
+    # start moving up the line towards the limiter at s = 0 with v0
+    v0 = -3.0
+    scene = PathScene.make(incline_chain(theta, 2.0), [ball], [s0], [v0], limiter_restitution="0.5",
+                           run=RunSettings.make("1"))
+    result = simulate_path(scene)
+    hit = result.limiter_impacts[0]
+    with mpmath.workdps(40):
+        acc = mpmath.mpf("9.81") * mpmath.sin(mpmath.mpf(theta)) * 5 / 7  # ds/dt grows at acc
+        # s0 + v0 t + acc t^2 / 2 = 0, the first root
+        disc = mpmath.mpf(v0) ** 2 - 2 * acc * mpmath.mpf(s0)
+        exact = (-mpmath.mpf(v0) - mpmath.sqrt(disc)) / acc
+    assert abs(hit["t"] - float(exact)) <= 4 * np.finfo(float).eps * float(exact)
+    assert hit["v_after"] == -0.5 * hit["v_before"] and hit["end"] == "lower"
+
+
+def test_a_body_turning_back_just_after_a_junction_is_not_lost():
+    # measured before the fix: heyoka never fires an event whose function is
+    # exactly 0.0 at the start of a step; the body crossed back unseen and the
+    # first integral jumped by 8 J
+    track = ArcChainTrack.three_arcs(1, "0.5", "0.2")
+    ball = Body.of_shape("solid_sphere", "0.08", mass=2)
+    hi = track.pieces(ball)[1].s1
+    for v in (-0.01, -0.3):
+        scene = PathScene.make(track, [ball], [hi + 1e-9], [v], run=RunSettings.make(1))
+        result = simulate_path(scene)
+        assert [(j["from"], j["to"]) for j in result.junctions] == [(3, 2), (2, 3)]
+        assert abs(result.energy_final - result.energy_initial) <= 1e-14 * abs(result.energy_initial)
+
+
+# ---------------------------------------------------------- first integral
+
+def first_integral_drift(scene, t_end, precision="long"):
+    result = simulate_path(scene, t_end=t_end, precision=precision)
+    scale = max(abs(result.energy_initial), float(scene.bodies[0].mass * scene.g))
+    return result, abs(result.energy_final - result.energy_initial) / scale
+
+
+def rotating_curve_scene(x0="1.3"):
+    scene = parse_scene(README_CURVE)
+    return PathScene.make(scene.track, scene.bodies, [x0], [0], frame=scene.frame)
+
+
+def rotating_chain_scene():
+    return PathScene.make(ArcChainTrack.three_arcs(1, "0.5", "0.2"), [DISK], ["0.6"], [0],
+                          frame=Frame.make("1.5", "0.1"))
+
+
+def test_first_integral_on_a_rotating_curve_over_1000_oscillations():
+    scene = rotating_curve_scene()
+    result, drift = first_integral_drift(scene, 1000.0)  # outer well, period ~0.9 s
+    assert result.status.value == "completed"
+    assert drift < 1e-13
+
+
+def test_first_integral_on_a_rotating_arc_chain_crossing_junctions():
+    scene = rotating_chain_scene()
+    result, drift = first_integral_drift(scene, 600.0)
+    assert len(result.junctions) > 200 and drift < 1e-13
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("make, t_end", [(rotating_curve_scene, 9500.0), (rotating_chain_scene, 35000.0)])
+def test_first_integral_over_ten_thousand_oscillations(make, t_end):
+    result, drift = first_integral_drift(make(), t_end)
+    assert drift < 1e-13
+
+
+def test_double_precision_drifts_where_long_does_not():
+    scene = rotating_curve_scene()
+    _, drift_long = first_integral_drift(scene, 1000.0, "long")
+    _, drift_double = first_integral_drift(scene, 1000.0, "double")
+    assert drift_long < drift_double
+
+
+# ---------------------------------------------------------------- equilibria
+
+@pytest.mark.parametrize("name", sorted(PAPER_CURVES))
+@pytest.mark.parametrize("omega", ["0", "2.0", "3.0", "4.5"])
+def test_equilibria_agree_with_an_independent_mpmath_solve(name, omega):
+    track = CurveTrack.make(PAPER_CURVES[name], "-2.1", "2.1")
+    problem = EquilibriumProblem(track, DISK, Frame.make(omega, "0.1"))
+    eq = find_equilibria(problem)
+    assert eq
+    roots = equilibrium_roots(track, DISK, omega, "0.1", guesses=[e.q for e in eq])
+    for e, r in zip(eq, roots):
+        assert abs(e.q - float(r)) <= 1e-12 * max(1, abs(e.q))
+    # and an independent coarse scan finds no equilibrium the engine missed
+    scan = equilibrium_roots(track, DISK, omega, "0.1", scan=300, domain=("-2.1", "2.1"))
+    assert all(min(abs(e.q - float(r)) for e in eq) < 1e-10 for r in scan)
+
+
+def test_equilibria_refuse_a_body_that_does_not_fit_the_curve():
+    track = CurveTrack.make("0.5*x**2*(x**2 - 1)**2*(x**2 - 4)", "-2.2", "2.2")  # radius of curvature 0.012 m
+    with pytest.raises(SceneError, match="radius of curvature"):
+        EquilibriumProblem(track, DISK)
+
+
+def test_equilibria_types_alternate_and_match_the_effective_potential():
+    problem = problem_of(parse_scene(README_CURVE))
+    eq = find_equilibria(problem)
+    types = [e.type for e in eq]
+    assert all(a != b for a, b in zip(types, types[1:]))
+    for e in eq:
+        h = 1e-4
+        curvature = problem.potential(e.q + h) + problem.potential(e.q - h) - 2 * problem.potential(e.q)
+        assert (curvature > 0) == (e.type == "center")
+
+
+def test_equilibria_do_not_depend_on_the_body_inertia():
+    track = CurveTrack.make(PAPER_CURVES["k x^2 (x^2 - a^2)^2"], -1.6, 1.6)
+    frame = Frame.make(3, 0)
+    ring = Body.of_shape("ring", "0.05", mass=1)
+    sphere = Body.of_shape("solid_sphere", "0.05", mass=7)
+    a = find_equilibria(EquilibriumProblem(track, ring, frame))
+    b = find_equilibria(EquilibriumProblem(track, sphere, frame))
+    assert [e.x for e in a] == [e.x for e in b]
+
+
+def test_pitchfork_at_the_central_minimum_and_none_at_the_maxima():
+    # f'' (0) = 1: the centre at x = 0 turns into a saddle at Omega^2 = g / (1/f''(0) - r),
+    # shedding the two saddles that came in from the maxima (section 5.3's theorem)
+    track = CurveTrack.make(PAPER_CURVES["k x^2 (x^2 - a^2)^2"], -1.6, 1.6)
+    problem = EquilibriumProblem(track, DISK, Frame.make(0, 0))
+    found = bifurcations(problem, np.linspace(0, 8, 81))
+    assert len(found) == 1
+    assert abs(found[0].omega - math.sqrt(9.81 / (1 - 0.05))) < 1e-12 * 3.3
+    assert abs(found[0].x) < 1e-6
+    # at Omega = 0 the maxima at +-1/sqrt(3) are saddles, with no partner born near them
+    eq0 = find_equilibria(problem)
+    saddles = [e.x for e in eq0 if e.type == "saddle"]
+    assert saddles == pytest.approx([-1 / math.sqrt(3), 1 / math.sqrt(3)], abs=1e-3)
+
+
+def test_pitchfork_in_a_bowl_under_its_own_axis_is_at_lambda_one():
+    # an axis through the centre of the left bowl: lambda = g / ((R - r) Omega^2) = 1
+    track = ArcChainTrack.three_arcs(1, "0.5", 0)
+    problem = EquilibriumProblem(track, DISK, Frame.make(0, "-1.5"))
+    found = bifurcations(problem, np.linspace(3.0, 3.5, 6), samples=20001, refine=30)
+    bowl = [b for b in found if abs(b.x + 1.5) < 0.01]
+    assert bowl and abs(bowl[0].omega - math.sqrt(9.81 / 0.95)) < 1e-6
+
+
+# ------------------------------------------------------- collisions on paths
+
+def test_single_concave_arc_reproduces_the_circle_engine():
+    """One concave arc of radius R is the circle: same collisions, same times."""
+    R = mpmath.mpf(1)
+    b1 = Body.of_shape("solid_sphere", "0.1", mass=1)
+    b2 = Body.of_shape("solid_sphere", "0.15", mass=2)
+    phi = [mpmath.mpf("-1.0"), mpmath.mpf("0.5")]
+    circle = Scene.make(track=CircleTrack.of_radius(R), bodies=[b1, b2], phi=phi, dphi=[0, 0],
+                        run=RunSettings.make(10))
+    ref = heyroll.simulate(circle)
+    chain = ArcChainTrack.make([Segment("arc", R, "concave", -mpmath.pi, mpmath.pi)])
+    s = [(R - b.radius) * (p + mpmath.pi) for b, p in zip((b1, b2), phi)]
+    path = PathScene.make(chain, [b1, b2], s, [0, 0], run=RunSettings.make(10))
+    result = simulate_path(path)
+    times = np.array([c["t"] for c in result.collisions])
+    assert len(times) == ref.n_collisions > 5
+    assert np.max(np.abs(times - np.asarray(ref.times, dtype=float))) < 1e-12
+
+
+def two_disks_on_rotating_arcs(k="1", t_end="20"):
+    text = f"""
+name = "two_disks_rotating_arcs"
+[track]
+type = "three_arcs"
+radius = 1.0
+hump_radius = 0.5
+beta = 0.2
+[frame]
+omega = 1.5
+axis_x = 0.0
+[[bodies]]
+shape = "disk"
+radius = 0.05
+mass = 1.0
+segment = 1
+angle = -2.6
+[[bodies]]
+shape = "disk"
+radius = 0.08
+mass = 2.0
+segment = 3
+angle = 0.3
+[collision]
+law = "hedrih"
+restitution = {k}
+[run]
+t_end = {t_end}
+"""
+    return parse_scene(text)
+
+
+def test_two_bodies_on_a_rotating_arc_track_elastic():
+    scene = two_disks_on_rotating_arcs()
+    result = simulate_path(scene, keep_branches=True)
+    assert result.status.value == "completed" and result.n_collisions >= 3
+    assert abs(result.energy_final - result.energy_initial) <= 1e-12 * abs(result.energy_initial)
+    t, X = result.sample(20000)
+    gaps = scene.gap(0, X[:, 0].astype(float), X[:, 2].astype(float))
+    assert gaps.min() > -1e-12
+    # energy moves between the bodies at the collisions
+    jumps = [abs(body_energy(scene, 0, c["q_i"], c["v_i_after"]) - body_energy(scene, 0, c["q_i"], c["v_i_before"]))
+             for c in result.collisions]
+    assert max(jumps) > 1e-3
+
+
+def test_two_bodies_on_a_rotating_arc_track_inelastic_lose_energy_at_each_collision():
+    scene = two_disks_on_rotating_arcs(k="0.7", t_end="10")
+    result = simulate_path(scene)
+    assert result.n_collisions >= 2
+    for c in result.collisions:
+        assert c["energy_after"] < c["energy_before"]
+
+
+# --------------------------------------------------------------------- CLI
+
+def test_cli_equilibria_json_on_the_readme_example(tmp_path, capsys):
+    path = tmp_path / "curve.toml"
+    path.write_text(README_CURVE)
+    assert main(["equilibria", str(path), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [sorted(d) for d in data] == [["type", "x"]] * len(data)
+    xs = [d["x"] for d in data]
+    assert xs == sorted(xs) and {d["type"] for d in data} == {"center", "saddle"}
+    assert [d["type"] for d in data] == ["center", "saddle", "center", "saddle", "center"]
+
+
+def test_cli_portrait_and_run_on_a_path_scene(tmp_path, capsys):
+    path = tmp_path / "curve.toml"
+    path.write_text(README_CURVE + "\n[run]\nt_end = 5\n")
+    assert main(["portrait", str(path), "--out", str(tmp_path / "p")]) == 0
+    data = json.loads((tmp_path / "p" / "portrait.json").read_text())
+    assert data["check"]["worst_relative_first_integral_drift"] < 1e-13
+    assert all((tmp_path / "p" / f).stat().st_size > 0 for f in ("portrait.png", "energy_surface.png", "bifurcation.png"))
+    assert main(["run", str(path), "--out", str(tmp_path / "r")]) == 0
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["status"] == "completed" and summary["track"] == "curve"
+
+
+@pytest.mark.parametrize("edit, field", [
+    (('y = "0.5*x**2*(x**2 - 1)**2"', 'y = "import(x)"'), "track.y"),
+    (("radius = 0.05", "radius = 0.6"), "bodies[1].radius"),
+    (("x = 0.3 ", "x = 3.0 "), "bodies[1].x"),
+    (("omega = 3.0", "omega = nan"), "frame.omega"),
+    (("axis_x = 0.0", "axis_y = 0.0"), "frame.axis_y"),
+])
+def test_cli_bad_path_scenes_exit_2_with_the_field(tmp_path, capsys, edit, field):
+    path = tmp_path / "bad.toml"
+    path.write_text(README_CURVE.replace(*edit))
+    out = tmp_path / "o"
+    assert main(["run", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert field in err and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_cli_equilibria_refuses_a_circle(capsys, tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text(default_scene_text())
+    assert main(["equilibria", str(path)]) == 2
+    assert "track.type" in capsys.readouterr().err
+
+
+def test_total_energy_is_the_sum_of_body_energies():
+    scene = two_disks_on_rotating_arcs()
+    state = [float(scene.q[0]), 0.3, float(scene.q[1]), -0.2]
+    assert total_energy(scene, state) == pytest.approx(
+        float(body_energy(scene, 0, state[0], state[1]) + body_energy(scene, 1, state[2], state[3])), rel=1e-15)
