@@ -128,6 +128,8 @@ def problem_of(scene: PathScene, body: int = 0) -> EquilibriumProblem:
 def find_equilibria(problem: EquilibriumProblem, samples: int = BRACKET_SAMPLES) -> list[Equilibrium]:
     """All sign-changing roots of h on the track, sorted by x, located to machine precision.
 
+    Roots at the ends of the track (on a limiter) are not listed.
+
     A grid brackets the roots (two roots closer than the grid step, which
     only happens within ~step^2 of a bifurcation, show as none); bisection
     then closes each bracket to adjacent doubles.
@@ -148,7 +150,10 @@ def find_equilibria(problem: EquilibriumProblem, samples: int = BRACKET_SAMPLES)
             continue  # the next bracket starts on it
         roots.append(_bisect(problem.h, a, b, fa))
     out = []
+    edge = 1e-9 * (hi - lo)
     for q in roots:
+        if q - lo < edge or hi - q < edge:
+            continue  # at a limiter: the stop, not a relative equilibrium of the track
         stiffness = float(np.atleast_1d(problem.dh(q))[0])
         out.append(Equilibrium(
             x=float(np.atleast_1d(problem.contact_x(q))[0]),
@@ -189,27 +194,52 @@ def bifurcation_diagram(problem: EquilibriumProblem, omegas, samples: int = 4001
 
 
 def bifurcations(problem: EquilibriumProblem, omegas, samples: int = 4001, refine: int = 50) -> list[Bifurcation]:
-    """Omegas where the number of equilibria changes, refined by bisection on Omega."""
+    """Omegas where the number of equilibria changes, refined by bisection on Omega.
+
+    An interval of the grid where the count changes is split until each piece
+    holds one change; on a curve each change is then polished as a fold
+    (h = h_x = 0, see :func:`_fold`).
+    """
     diagram = bifurcation_diagram(problem, omegas, samples)
+    count = {float(om): len(eq) for om, eq in diagram}
+
+    def n_at(om: float) -> int:
+        if om not in count:
+            count[om] = len(find_equilibria(problem.with_omega(om), samples))
+        return count[om]
+
     out = []
     for (o1, e1), (o2, e2) in zip(diagram, diagram[1:]):
-        if len(e1) == len(e2):
-            continue
-        a, b, na = o1, o2, len(e1)
-        for _ in range(refine):
-            m = 0.5 * (a + b)
-            if len(find_equilibria(problem.with_omega(m), samples)) == na:
-                a = m
-            else:
-                b = m
-        born = find_equilibria(problem.with_omega(b), samples)
-        old = find_equilibria(problem.with_omega(a), samples)
-        where = _new_position(old, born)
-        omega = 0.5 * (a + b)
-        if isinstance(problem.track, CurveTrack):
-            where, omega = _fold(problem, where, omega)
-        out.append(Bifurcation(omega=omega, x=where, before=len(e1), after=len(e2)))
+        if len(e1) != len(e2):
+            _changes(problem, n_at, o1, o2, samples, refine, out, depth=0)
     return out
+
+
+def _changes(problem, n_at, a: float, b: float, samples: int, refine: int, out: list, depth: int) -> None:
+    """Locate every change of the count in (a, b): split at the middle while the
+    two halves both change (two events in one interval), then bisect."""
+    mid = 0.5 * (a + b)
+    na, nm, nb = n_at(a), n_at(mid), n_at(b)
+    if depth < 30 and na != nm and nm != nb:
+        _changes(problem, n_at, a, mid, samples, refine, out, depth + 1)
+        _changes(problem, n_at, mid, b, samples, refine, out, depth + 1)
+        return
+    lo, hi = a, b
+    for _ in range(refine):
+        m = 0.5 * (lo + hi)
+        if n_at(m) == na:
+            lo = m
+        else:
+            hi = m
+    old = find_equilibria(problem.with_omega(lo), samples)
+    new = find_equilibria(problem.with_omega(hi), samples)
+    where, omega = _new_position(old, new), 0.5 * (lo + hi)
+    if isinstance(problem.track, CurveTrack):
+        polished = _fold(problem, where, omega)
+        # keep the polish only if it converged to the same event
+        if np.isfinite(polished[1]) and abs(polished[1] - omega) <= 1e-3 * max(1.0, omega):
+            where, omega = polished
+    out.append(Bifurcation(omega=omega, x=where, before=na, after=n_at(b)))
 
 
 def _fold(problem: EquilibriumProblem, x: float, omega: float) -> tuple[float, float]:
@@ -230,6 +260,8 @@ def _fold(problem: EquilibriumProblem, x: float, omega: float) -> tuple[float, f
         J = np.array([[g * d2 - w * dx_c, -(x_c - a)], [g * d3 - w * ddx_c, -dx_c]])
         step = np.linalg.lstsq(J, -F, rcond=None)[0]
         x, w = x + step[0], w + step[1]
+        if not (np.isfinite(x) and np.isfinite(w) and w >= 0):
+            return float("nan"), float("nan")
         if abs(step[0]) <= 1e-16 * max(1, abs(x)) and abs(step[1]) <= 1e-16 * w:
             break
     return float(x), float(np.sqrt(w))

@@ -276,7 +276,8 @@ def _run_path(args, scene: PathScene, out: Path, t_end, max_collisions) -> int:
             print("heyroll: interrupted", file=sys.stderr)
             return EXIT_INTERRUPTED
     write_path_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures)
-    print(f"{scene.name}: {len(scene.bodies)} bodies on a {scene.track.kind} track, "
+    n = len(scene.bodies)
+    print(f"{scene.name}: {n} bod{'y' if n == 1 else 'ies'} on a track of type {scene.track.kind}, "
           f"Omega = {float(scene.frame.omega):.6g} rad/s")
     print(f"{result.status.value}: {result.message}")
     print(f"{result.n_collisions} collisions, {len(result.limiter_impacts)} limiter impacts, "

@@ -68,10 +68,10 @@ def portrait_figure(scene: PathScene, path, *, body: int = 0, trajectories: int 
     fig = Figure(figsize=(10, 6))
     ax = fig.add_subplot()
     levels = np.linspace(np.nanmin(H), np.nanpercentile(H, 70), 28)
-    ax.contour(q, v, H, levels=levels, colors="0.6", linewidths=0.6)
+    ax.contour(q, v, H, levels=levels, colors="0.6", linewidths=0.6, negative_linestyles="solid")
     saddle_levels = sorted({e.potential for e in eq if e.type == "saddle"})
     if saddle_levels:
-        ax.contour(q, v, H, levels=saddle_levels, colors="tab:red", linewidths=1.4)
+        ax.contour(q, v, H, levels=saddle_levels, colors="tab:red", linewidths=1.4, negative_linestyles="solid")
     for e in eq:
         ax.plot(e.q, 0, "o" if e.type == "center" else "x", color="tab:green" if e.type == "center" else "tab:red",
                 ms=8, mew=2)
@@ -84,7 +84,7 @@ def portrait_figure(scene: PathScene, path, *, body: int = 0, trajectories: int 
     ax.set_xlabel(coord)
     ax.set_ylabel(f"d{scene.coordinate}/dt [m/s]")
     omega = float(scene.frame.omega)
-    ax.set_title(f"{scene.name}: phase portrait of body {body + 1}, Omega = {omega:g} rad/s "
+    ax.set_title(f"{scene.name}\nphase portrait of body {body + 1}, Omega = {omega:g} rad/s "
                  f"(red: separatrices, o centres, x saddles, black: limiters"
                  f"{', dashed: junctions' if _junctions(scene, body) else ''}; colour: integrated)", fontsize=8)
     ax.set_ylim(-vmax, vmax)
