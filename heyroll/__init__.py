@@ -16,6 +16,8 @@ from ._version import __version__
 from .errors import SceneError, SceneFileError
 from .model.bodies import Body, Shape
 from .model.laws import CollisionLaw, GeneralizedNewtonLaw, HedrihRollingLaw, NewtonCentreLaw, make_law
+from .model.path_scene import PathScene
+from .model.paths import ArcChainTrack, CurveTrack, Frame, Segment
 from .model.scene import RunSettings, Scene
 from .model.tracks import CircleTrack
 
@@ -27,6 +29,11 @@ _LAZY = {
     "SimulationResult": ("heyroll.simulation.result", "SimulationResult"),
     "Status": ("heyroll.simulation.result", "Status"),
     "TABLE_COLUMNS": ("heyroll.simulation.result", "TABLE_COLUMNS"),
+    "simulate_path": ("heyroll.simulation.path_driver", "simulate_path"),
+    "PathResult": ("heyroll.simulation.path_driver", "PathResult"),
+    "EquilibriumProblem": ("heyroll.analysis.equilibria", "EquilibriumProblem"),
+    "find_equilibria": ("heyroll.analysis.equilibria", "find_equilibria"),
+    "bifurcations": ("heyroll.analysis.equilibria", "bifurcations"),
     "default_scene": ("heyroll.interfaces.scene_file", "default_scene"),
     "load_scene": ("heyroll.interfaces.scene_file", "load_scene"),
     "parse_scene": ("heyroll.interfaces.scene_file", "parse_scene"),
@@ -45,7 +52,17 @@ def __getattr__(name):
 
 
 __all__ = [
+    "ArcChainTrack",
     "Body",
+    "CurveTrack",
+    "EquilibriumProblem",
+    "Frame",
+    "PathResult",
+    "PathScene",
+    "Segment",
+    "bifurcations",
+    "find_equilibria",
+    "simulate_path",
     "CircleTrack",
     "CollisionLaw",
     "GeneralizedNewtonLaw",

@@ -145,6 +145,23 @@ def bifurcation_figure(scene: PathScene, path, omegas, *, body: int = 0) -> list
         if pts:
             ax.plot(*zip(*pts), marker, color=colour, ms=3, ls="none", label=kind)
     ax.axvline(float(scene.frame.omega), color="0.5", ls=":", label="scene's Omega")
+    if isinstance(scene.track, ArcChainTrack):
+        # the paper's bifurcation parameter of the first concave arc, lambda = g / ((R - r) Omega^2)
+        rho = next(1 / p.c for p in scene.track.pieces(scene.bodies[body]) if p.c > 0)
+        g = float(scene.g)
+
+        def to_lambda(om):
+            with np.errstate(divide="ignore"):
+                return g / (rho * np.square(om))
+
+        def to_omega(lam):
+            with np.errstate(divide="ignore"):
+                return np.sqrt(g / (rho * np.asarray(lam)))
+
+        top = ax.secondary_xaxis("top", functions=(to_lambda, to_omega))
+        top.set_xlabel(f"lambda = g / ((R - r) Omega^2), R - r = {rho:.4g} m")
+        top_om = float(np.max(omegas))
+        top.set_xticks([lam for lam in (16, 4, 2, 1, 0.5, 0.25) if np.sqrt(g / (rho * lam)) <= top_om])
     ax.set_xlabel("Omega [rad/s]")
     ax.set_ylabel("x of the equilibrium's contact point [m]")
     ax.legend(fontsize=8)
