@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 import math
 
 import mpmath
@@ -431,3 +432,31 @@ def test_total_energy_is_the_sum_of_body_energies():
     state = [float(scene.q[0]), 0.3, float(scene.q[1]), -0.2]
     assert total_energy(scene, state) == pytest.approx(
         float(body_energy(scene, 0, state[0], state[1]) + body_energy(scene, 1, state[2], state[3])), rel=1e-15)
+
+
+ARC_CHAIN = (Path(__file__).resolve().parents[1] / "examples" / "arc_chain.toml").read_text()
+
+
+@pytest.mark.parametrize("edit, field", [
+    (('kind = "line"', 'kind = "spline"'), "track.segments[1].kind"),
+    (('side = "concave"', 'side = "inside"'), "track.segments[2].side"),
+    (("length = 1.0", "length = -1.0"), "track.segments[1].length"),
+    (("start = -0.5 ", "start = -0.4 "), "track.segments[2].start"),
+    (("radius = 0.6", "radius = 0.6\ncolour = 1"), "track.segments[3].colour"),
+    (("s = 0.2", "segment = 9\nangle = 0.1"), "bodies[1].segment"),
+    (("s = 0.2", "s = 0.2\nsegment = 1"), "bodies[1].segment"),
+    (("s = 0.2", "s = 99.0"), "bodies[1].s"),
+    (("radius = 0.1", "radius = 1.5"), "bodies[1].radius"),
+    (('type = "arcs"', 'type = "arcs"\nlimiter_restitution = 2'), "track.limiter_restitution"),
+])
+def test_bad_arc_chain_scenes_name_the_field(edit, field):
+    with pytest.raises(SceneError) as info:
+        parse_scene(ARC_CHAIN.replace(*edit, 1))
+    assert info.value.field == field and "\n" not in str(info.value)
+
+
+def test_example_arc_chain_runs_and_keeps_its_first_integral():
+    scene = parse_scene(ARC_CHAIN)
+    result = simulate_path(scene)
+    assert len(result.junctions) > 5 and result.status.value == "completed"
+    assert abs(result.energy_final - result.energy_initial) <= 1e-14 * abs(result.energy_initial)
