@@ -127,7 +127,7 @@ def main(argv=None) -> int:
             else:
                 on_min = min(minima, key=lambda x: abs(x - b.x)) if minima else None
                 on_max = min(maxima, key=lambda x: abs(x - b.x)) if maxima else None
-                what = (f"pitchfork at the minimum of f on the axis" if on_min is not None and abs(b.x - on_min) < 1e-3
+                what = ("pitchfork at the minimum of f on the axis" if on_min is not None and abs(b.x - on_min) < 1e-3
                         else f"saddle-node: the centre from the minimum at {on_min:+.6f} meets the saddle "
                              f"from the maximum at {on_max:+.6f}")
             print(f"    Omega = {b.omega:.12f} rad/s at x = {b.x:+.6f}, {b.before} -> {b.after} equilibria: {what}")

@@ -19,9 +19,7 @@ vertical axis at constant Omega.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from decimal import Decimal
 
 import mpmath
 import numpy as np
@@ -370,14 +368,3 @@ class CurveTrack:
         d1, d2 = self.numeric(self.df, x), self.numeric(self.d2f, x)
         w2 = 1 + d1 * d1
         return w2 * (1 - r * d2 / w2**1.5) ** 2
-
-
-def decimal_text(value) -> str:
-    """A scene number as the decimal text the expression library reads."""
-    if isinstance(value, Decimal):
-        return str(value)
-    return repr(float(value)) if isinstance(value, float) else str(value)
-
-
-def wrap_angle(a: float) -> float:
-    return math.remainder(a, 2 * math.pi)
