@@ -460,3 +460,30 @@ def test_example_arc_chain_runs_and_keeps_its_first_integral():
     result = simulate_path(scene)
     assert len(result.junctions) > 5 and result.status.value == "completed"
     assert abs(result.energy_final - result.energy_initial) <= 1e-14 * abs(result.energy_initial)
+
+
+@pytest.mark.parametrize("shape, kappa", [("disk", 1.5), ("solid_sphere", 1.4), ("ring", 2.0)])
+def test_body_leaves_a_one_sided_hump_where_the_normal_force_vanishes(shape, kappa):
+    """From the top of a convex arc with speed v0 the centre leaves its circle of radius rho at
+    cos(psi) = (kappa v0^2/(g rho) + 2)/(kappa + 2) (energy: kappa v^2 = kappa v0^2 + 2 g rho (1 - cos psi),
+    and N = 0 when v^2 = g rho cos psi)."""
+    track = ArcChainTrack.three_arcs(1, "0.5", "0.2")
+    body = Body.of_shape(shape, "0.05", mass=1)
+    piece = track.pieces(body)[1]
+    rho, v0 = 0.55, 0.3
+    top = piece.s0 + rho * (math.pi / 2 - 0.2)
+    one = PathScene.make(track, [body], [top], [v0], track_sides="one", run=RunSettings.make(5))
+    result = simulate_path(one)
+    assert result.status.value == "left_track" and "body 1 would leave the track" in result.message
+    psi = (float(result.state[0]) - top) / rho
+    with mpmath.workdps(30):
+        exact = mpmath.acos((kappa * mpmath.mpf(v0) ** 2 / (mpmath.mpf("9.81") * mpmath.mpf(rho)) + 2) / (kappa + 2))
+    assert abs(psi - float(exact)) < 1e-12
+    two = simulate_path(PathScene.make(track, [body], [top], [v0], run=RunSettings.make(5)))
+    assert two.status.value == "completed" and len(two.warnings) == 1 and "two-sided" in two.warnings[0]
+
+
+def test_a_body_resting_in_a_bowl_presses_on_it():
+    track = ArcChainTrack.three_arcs(1, "0.5", "0.2")
+    result = simulate_path(PathScene.make(track, [DISK], ["2.0"], [0], track_sides="one", run=RunSettings.make(20)))
+    assert result.status.value == "completed" and result.warnings == []

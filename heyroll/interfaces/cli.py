@@ -280,6 +280,8 @@ def _run_path(args, scene: PathScene, out: Path, t_end, max_collisions) -> int:
     print(f"{scene.name}: {n} bod{'y' if n == 1 else 'ies'} on a track of type {scene.track.kind}, "
           f"Omega = {float(scene.frame.omega):.6g} rad/s")
     print(f"{result.status.value}: {result.message}")
+    for warning in result.warnings:
+        print(f"warning: {warning}")
     print(f"{result.n_collisions} collisions, {len(result.limiter_impacts)} limiter impacts, "
           f"{len(result.junctions)} junction crossings, t_final = {result.t_final:.17g} s, "
           f"first integral {result.energy_initial:.17g} -> {result.energy_final:.17g} J, {result.wall_time:.3g} s wall")

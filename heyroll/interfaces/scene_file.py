@@ -26,9 +26,9 @@ TRACK_KEYS = {"type", "radius", "friction", "sides"}
 TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs")
 #: Keys of each path track type (paper section 5).
 PATH_TRACK_KEYS = {
-    "curve": {"type", "y", "x_min", "x_max", "limiter_restitution"},
-    "arcs": {"type", "segments", "start_x", "start_y", "limiter_restitution"},
-    "three_arcs": {"type", "radius", "hump_radius", "beta", "limiter_restitution"},
+    "curve": {"type", "y", "x_min", "x_max", "limiter_restitution", "sides"},
+    "arcs": {"type", "segments", "start_x", "start_y", "limiter_restitution", "sides"},
+    "three_arcs": {"type", "radius", "hump_radius", "beta", "limiter_restitution", "sides"},
 }
 SEGMENT_KEYS = {"arc": {"kind", "radius", "side", "start", "end"}, "line": {"kind", "angle", "length"}}
 FRAME_KEYS = {"omega", "axis_x"}
@@ -80,7 +80,7 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene | PathS
         raise SceneError("name", "must be a string")
     g = _number(data, "g", "", default=STANDARD_GRAVITY)
     track_table = _table(data, "track", required=True)
-    if track_table.get("type") in PATH_TRACK_KEYS:
+    if isinstance(track_table.get("type"), str) and track_table["type"] in PATH_TRACK_KEYS:  # [] / {}: unhashable
         return _path_scene(data, track_table, name, g)
     if "frame" in data:
         frame = _frame(_table(data, "frame", required=False))
@@ -194,7 +194,15 @@ def _path_scene(data: dict, track_table: dict, name: str, g) -> PathScene:
     settings = RunSettings.make(_number(run, "t_end", "run", default="100"), run.get("max_collisions"))
     return PathScene.make(track, bodies, qs, dqs, law=law,
                           limiter_restitution=_number(track_table, "limiter_restitution", "track"),
-                          frame=frame, g=g, run=settings, name=name, on_inconsistent=policy)
+                          frame=frame, g=g, run=settings, name=name, on_inconsistent=policy,
+                          track_sides=_sides(track_table))
+
+
+def _sides(table: dict) -> str:
+    sides = table.get("sides", "two")
+    if not isinstance(sides, str):
+        raise SceneError("track.sides", "must be a string: one | two")
+    return sides
 
 
 def _law(collision: dict):

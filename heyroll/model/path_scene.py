@@ -37,11 +37,16 @@ class PathScene:
     run: RunSettings
     name: str = "scene"
     on_inconsistent: str = "newton"
+    #: two: the track guides the body on both sides (a normal force that changes
+    #: sign is a warning); one: the body rests on the track and the run stops
+    #: where it would leave it
+    track_sides: str = "two"
 
     @classmethod
     def make(cls, track: PathTrack, bodies, q, dq, *, law: CollisionLaw | None = None,
              limiter_restitution: Real | None = None, frame: Frame = STATIONARY, g: Real = "9.81",
-             run: RunSettings | None = None, name: str = "scene", on_inconsistent: str = "newton") -> "PathScene":
+             run: RunSettings | None = None, name: str = "scene", on_inconsistent: str = "newton",
+             track_sides: str = "two") -> "PathScene":
         bodies = tuple(bodies)
         if not bodies:
             raise SceneError("bodies", "at least one body is required")
@@ -57,6 +62,8 @@ class PathScene:
             raise SceneError("g", f"must be a finite number > 0, got {g}")
         if on_inconsistent not in INCONSISTENCY_POLICIES:
             raise SceneError("collision.on_inconsistent", f"unknown policy {on_inconsistent!r}; expected newton | error")
+        if track_sides not in ("one", "two"):
+            raise SceneError("track.sides", f"must be one or two, got {track_sides!r}")
         for n, body in enumerate(bodies, start=1):
             track.check_body(body, f"bodies[{n}]")
             if body.is_particle and law.name == "hedrih":
@@ -64,7 +71,8 @@ class PathScene:
         q = tuple(to_mpf(v) for v in q)
         dq = tuple(to_mpf(v) for v in dq)
         scene = cls(track=track, bodies=bodies, q=q, dq=dq, law=law, limiter_restitution=k_lim, frame=frame,
-                    g=to_mpf(g), run=run or RunSettings.make(), name=name, on_inconsistent=on_inconsistent)
+                    g=to_mpf(g), run=run or RunSettings.make(), name=name, on_inconsistent=on_inconsistent,
+                    track_sides=track_sides)
         scene._check_positions()
         return scene
 

@@ -82,6 +82,8 @@ class PathResult:
     wall_time: float = 0.0
     branches: list = field(default_factory=list)
     inconsistent: int = 0
+    #: first time each body's normal force fell to zero on a two-sided track
+    warnings: list = field(default_factory=list)
 
     @property
     def n_collisions(self) -> int:
@@ -111,7 +113,7 @@ class PathResult:
             "scene": self.scene.name, "status": self.status.value, "message": self.message,
             "t_final": self.t_final, "collisions": self.n_collisions,
             "limiter_impacts": len(self.limiter_impacts), "junction_crossings": len(self.junctions),
-            "inconsistent_collisions": self.inconsistent,
+            "inconsistent_collisions": self.inconsistent, "warnings": self.warnings,
             "first_integral_initial": self.energy_initial, "first_integral_final": self.energy_final,
             "steps": self.n_steps, "wall_time_s": self.wall_time,
         }
@@ -192,7 +194,18 @@ def simulate_path(scene: PathScene, *, t_end: float | None = None, max_collision
     scale = time_scale(scene)
     last: dict = {}
     status, message = Status.COMPLETED, f"reached t_end = {t_end:.17g} s"
-    while True:
+    warned: set = set()
+    fn = system.centre_function
+    start = fn(np.asarray(ta.state), pars=np.asarray(parameters[:fn.nparams]))
+    for b in range(n):
+        if start[4 * b + 3] < 0:
+            left = _leaves(scene, b, 0.0, float(state[2 * b]))
+            if scene.track_sides == "one":
+                status, message = Status.LEFT_TRACK, left + " (at the start)"
+            else:
+                result.warnings.append(left + " (at the start; the two-sided track holds it)")
+                warned.add(b)
+    while status is Status.COMPLETED:
         fired.clear()
         t0 = float(ta.time)
         out = ta.propagate_until(fp_type(t_end), c_output=keep_branches)
@@ -217,6 +230,15 @@ def simulate_path(scene: PathScene, *, t_end: float | None = None, max_collision
                        "contact modes are not modelled on arc-chain and curve tracks yet")
             break
         s = ta.state
+        if ev.kind == "normal":
+            left = _leaves(scene, ev.body, t, float(s[2 * ev.body]))
+            if scene.track_sides == "one":
+                status, message = Status.LEFT_TRACK, left
+                break
+            if ev.body not in warned:
+                warned.add(ev.body)
+                result.warnings.append(left + "; the two-sided track holds it (sides = \"one\" stops here)")
+            continue
         if ev.kind == "gap":
             ok, msg = _collide(scene, ta, ev.body, k_law, result)
             if not ok:
@@ -254,6 +276,12 @@ def simulate_path(scene: PathScene, *, t_end: float | None = None, max_collision
     return result
 
 
+def _leaves(scene: PathScene, b: int, t: float, q: float) -> str:
+    x_c, y_c = scene.centre(b, q)
+    return (f"body {b + 1} would leave the track at t = {t:.17g} s, {scene.coordinate} = {q:.17g} "
+            f"(centre at x = {float(x_c):.6g} m, y = {float(y_c):.6g} m): the normal force reaches 0")
+
+
 def _off_event_surfaces(system: PathSystem, ta, parameters) -> None:
     """Move off any event surface the state sits on exactly.
 
@@ -268,11 +296,13 @@ def _off_event_surfaces(system: PathSystem, ta, parameters) -> None:
     for _ in range(4):
         fn = system.event_function
         values = fn(np.asarray(ta.state), pars=np.asarray(parameters[:fn.nparams]))
-        zero = np.flatnonzero(values == 0.0)
-        if zero.size == 0:
+        zero = [n for n in np.flatnonzero(values == 0.0) if system.event_specs[n].kind != "normal"]
+        if not zero:
             return
         for n in zero:
             ev = system.event_specs[n]
+            if ev.kind == "normal":
+                continue  # a warning surface: nothing to protect
             if system.chain and ev.kind in ("lower", "upper"):
                 k = system.par_index(ev.body, "lo" if ev.kind == "lower" else "hi")
                 parameters[k] = np.nextafter(parameters[k], -np.inf if ev.kind == "lower" else np.inf)

@@ -68,12 +68,15 @@ class BodyTerms:
     x_c: hy.expression
     y_c: hy.expression
     acceleration: hy.expression
+    #: N/m, the track's normal force per unit mass (> 0: pressing on the track)
+    normal: hy.expression
 
 
 @dataclass(frozen=True)
 class PathEvent:
     """A terminal event: ``kind`` is lower | upper (ends of the body's piece or of
-    the curve) or gap (bodies ``body`` and ``body + 1``)."""
+    the curve), gap (bodies ``body`` and ``body + 1``) or normal (the track's
+    normal force on ``body`` falls to zero: it would leave a one-sided track)."""
 
     kind: str
     body: int
@@ -116,7 +119,9 @@ class PathSystem:
         fp = lambda v: to_float(v, self.fp_type)  # noqa: E731
         r = fp(body.radius)
         g_k = hy.expression(fp(scene.g / body.kappa))
+        g = hy.expression(fp(scene.g))
         omega2 = scene.frame.omega**2
+        om2 = hy.expression(fp(omega2))
         om_k = hy.expression(fp(omega2 / body.kappa))
         a = hy.expression(fp(scene.frame.axis_x))
         if self.chain:
@@ -125,9 +130,12 @@ class PathSystem:
             x_c = P("A") + P("B") * hy.sin(alpha) + P("D") * (q - P("s0"))
             y_c = P("E") - P("B") * hy.cos(alpha) + P("G") * (q - P("s0"))
             acc = -g_k * hy.sin(alpha)  # F = 1, y_C' = sin(alpha), x_C' = cos(alpha)
+            # along the left normal n = (-sin, cos): m c v^2 = N - m g cos(alpha) - m Omega^2 (x_C - a) sin(alpha)
+            normal = P("c") * v * v + g * hy.cos(alpha)
             if omega2:
                 acc = acc + om_k * (x_c - a) * hy.cos(alpha)
-            return BodyTerms(q, v, x_c, y_c, acc)
+                normal = normal + om2 * (x_c - a) * hy.sin(alpha)
+            return BodyTerms(q, v, x_c, y_c, acc, normal)
         track: CurveTrack = scene.track
         lib = heyoka_library(self.fp_type)
         has_radius = bool(body.radius)
@@ -135,8 +143,8 @@ class PathSystem:
         f0, f1, f2, f3 = (ex.evaluate(node, q, lib) for node in (track.f, track.df, track.d2f, track.d3f))
         w2 = 1.0 + f1 * f1
         w = hy.sqrt(w2)
+        curv = f2 / (w2 * w)  # signed curvature of the track
         if has_radius:
-            curv = f2 / (w2 * w)  # signed curvature
             one = 1.0 - r * curv  # |dC/dx| / |dP/dx|: > 0 by the track check
             dcurv = f3 / (w2 * w) - 3.0 * f1 * f2 * f2 / (w2 * w2 * w)
             F = w2 * one * one
@@ -147,9 +155,13 @@ class PathSystem:
             F, dF = w2, 2.0 * f1 * f2
             x_c, y_c = q, f0
         force = -0.5 * dF * v * v - g_k * f1 * one
+        # centre path curvature k/(1 - r k) times the centre speed^2 F v^2, plus gravity and
+        # the centrifugal force along the normal (-f', 1)/sqrt(1 + f'^2)
+        normal = curv * w2 * one * v * v + g / w
         if omega2:
             force = force + om_k * (x_c - a) * one
-        return BodyTerms(q, v, x_c, y_c, force / F)
+            normal = normal + om2 * (x_c - a) * f1 / w
+        return BodyTerms(q, v, x_c, y_c, force / F, normal)
 
     @cached_property
     def equations(self) -> list:
@@ -162,10 +174,13 @@ class PathSystem:
         for n in range(self.n):
             specs += [PathEvent("lower", n), PathEvent("upper", n)]
         specs += [PathEvent("gap", n) for n in range(self.n - 1)]
+        specs += [PathEvent("normal", n) for n in range(self.n)]
         return tuple(specs)
 
     def event_expression(self, ev: PathEvent) -> hy.expression:
         t = self.terms[ev.body]
+        if ev.kind == "normal":
+            return t.normal
         if ev.kind in ("lower", "upper"):
             if self.chain:
                 return t.q - hy.par[self.par_index(ev.body, "lo" if ev.kind == "lower" else "hi")]
@@ -185,7 +200,7 @@ class PathSystem:
             return cb
 
         direction = {"lower": hy.event_direction.negative, "upper": hy.event_direction.positive,
-                     "gap": hy.event_direction.negative}
+                     "gap": hy.event_direction.negative, "normal": hy.event_direction.negative}
         return [hy.t_event(self.event_expression(ev), callback=callback(n), direction=direction[ev.kind],
                            fp_type=self.fp_type) for n, ev in enumerate(self.event_specs)]
 
@@ -197,6 +212,6 @@ class PathSystem:
 
     @cached_property
     def centre_function(self):
-        """Compiled (x_C, y_C, acceleration) of every body, for checks and outputs."""
-        outs = [e for t in self.terms for e in (t.x_c, t.y_c, t.acceleration)]
+        """Compiled (x_C, y_C, acceleration, N/m) of every body, for checks and outputs."""
+        outs = [e for t in self.terms for e in (t.x_c, t.y_c, t.acceleration, t.normal)]
         return hy.cfunc(outs, vars=list(self.variables), fp_type=self.fp_type)
