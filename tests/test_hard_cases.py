@@ -498,21 +498,21 @@ def test_friction_limit_stops_a_swinging_disk_where_it_would_slip():
 def test_one_sided_track_body_starting_where_it_cannot_stay_leaves_at_t0():
     sc = scene([body(phi="2.0")], track='sides = "one"', t_end="5")
     result = heyroll.simulate(sc)
-    # measured: left_track at t = 1.27 s, phi = -1.818 (after rolling through the bottom)
+    # before 9b98a1c: left_track only at t = 1.27 s, phi = -1.818 (after rolling through the bottom)
     assert result.status is Status.LEFT_TRACK and float(result.t_final) == 0.0
 
 
 def test_friction_limit_already_exceeded_at_t0_stops_at_t0():
     sc = scene([body(shape="disk", phi="-0.5")], track="friction = 0.05", t_end="5")
     result = heyroll.simulate(sc)
-    # measured: slip at t = 0.722 s, phi = 0.170, on the other side of the bottom
+    # before 9b98a1c: slip only at t = 0.722 s, phi = 0.170, on the other side of the bottom
     assert result.status is Status.SLIP and float(result.t_final) == 0.0
 
 
 def test_sample_branches_restart_from_the_merged_state():
     sc = scene([body(phi="-1.0"), body(mass="2.0", phi="0.0"), body(mass="0.5", phi="0.9")], k="0.5", t_end="3")
     result = heyroll.simulate(sc)
-    # measured: the raw samples show bodies 1 and 2 overlapping by 7.4e-9 rad
+    # before 9b98a1c: the samples showed bodies 1 and 2 overlapping by 7.4e-9 rad
     # just before body 1 hits the (2, 3) cluster at t = 1.325 s.
     assert min_gap(result, sampler=sample_branches) >= GAP_FLOOR
 
@@ -583,68 +583,104 @@ def test_cli_interrupted_run_leaves_a_complete_table(tmp_path, sig):
     assert not (out / ".collisions.npy.tmp").exists()
 
 
-# -- engine bugs found by tests/test_fuzz.py -------------------------------------------------------
+# -- engine bugs found by tests/test_fuzz.py (fixed) -----------------------------------------------
 #
 # One root cause behind the first three: heyoka's event detection cannot see a
 # root of an event function that is exactly 0.0 at the start of a step (pure
 # heyoka: x'' = -1, x(0) = 0, x'(0) = 0.01, t_event on x with direction
 # negative: the root at t = 0.02 is missed; with x(0) = 1e-300 it is found).
 # A watched gap that starts a step at exactly 0.0, opening slowly while its
-# acceleration closes it, re-closes inside that first step unseen.
+# acceleration closes it, re-closed inside that first step unseen. Now every
+# pair touching at the start of a mode or after a cascade is collided, put in
+# contact, or opened by a few ulps (events.contact_settler), and a guard event
+# per pair stops a run whose gap goes below -overlap_tolerance anyway.
 
 
-@pytest.mark.xfail(strict=True, reason="engine bug: bodies starting touching with a gap of exactly 0.0 (in double) "
-                   "and slowly separating re-close within heyoka's first step unseen: no collision, status overlap")
+def test_heyoka_misses_a_root_when_the_event_function_starts_at_exactly_zero():
+    """The heyoka behaviour behind the first three bugs below (if heyoka changes, this says so)."""
+    import heyoka as hy
+
+    x, v = hy.make_vars("x", "v")
+    found = {}
+    for x0 in (0.0, 1e-300):
+        hits = []
+        event = hy.t_event(x, callback=lambda ta, d, hits=hits: hits.append(ta.time) or False,
+                           direction=hy.event_direction.negative)
+        ta = hy.taylor_adaptive([(x, v), (v, -1.0 + 0.0 * x)], [x0, 0.01], t_events=[event])
+        ta.propagate_until(1.0)
+        found[x0] = hits
+    assert found[0.0] == []  # x = 0.01 t - t^2/2 returns to 0 at t = 0.02: unseen
+    assert found[1e-300] == [pytest.approx(0.02, rel=1e-12)]
+
+
 def test_gap_exactly_zero_at_a_mode_start_touching_start():
     # phi_2 - phi_1 - beta is +2e-17 exactly and 0.0 in double; body 2 moves away at 0.02 rad/s,
     # the pair is pressed (gap'' < 0): the gap re-closes at t ~ 0.01 s.
     sc = scene([body(phi="0.0"), body(mass="2.0", phi="0.2226820286819278", dphi="0.02")], k="0.5", t_end="2")
     result = heyroll.simulate(sc)
-    # measured: 0 collisions, status overlap (gap -0.060 rad at t = 2 s; -0.446 along the run)
+    # before the fix: 0 collisions, status overlap (gap -0.060 rad at t = 2 s; -0.446 along the run)
     assert result.status is Status.COMPLETED and result.n_collisions > 0
+    # the bounce that re-closes the gap: v^2 / (2 A) high, back after 2 v / A
+    A = stiffness(sc, 0) * math.sin(0.0) - stiffness(sc, 1) * math.sin(0.2226820286819278)
+    assert float(result.times[0]) == pytest.approx(2 * 0.02 / -A, rel=0.05)
     assert min_gap(result) >= GAP_FLOOR
 
 
-@pytest.mark.xfail(strict=True, reason="engine bug: after a contact split the gap restarts at exactly 0.0; the pair "
-                   "re-closes within heyoka's first step unseen and overlaps by 1.2 rad, yet the run ends 'completed'")
 def test_gap_exactly_zero_at_a_mode_start_after_a_split():
     sc = scene(
         [body(radius="0.20552171037334813", phi="-1.5492089749104005"),
          body(radius="0.12647999996429304", phi="-1.1596784170279733")], k="0.0", t_end="5",
     )
     result = heyroll.simulate(sc)
-    # measured: contact from t = 0 (pressed), split at t = 1.2206 s, then the gap
-    # falls to -1.199 rad; one collision at 4.68 s; status completed.
-    assert result.contact_intervals[0]["t_end"] == pytest.approx(1.2206, abs=1e-3)
+    # before the fix: contact from t = 0 (pressed), split at t = 1.2206 s, then the gap
+    # fell to -1.199 rad; one collision at 4.68 s; status completed.
+    t_split = result.contact_intervals[0]["t_end"]
+    assert t_split == pytest.approx(1.2206, abs=1e-3)
+    assert result.status is Status.COMPLETED
+    assert result.n_collisions and float(result.times[0]) > t_split  # the pair meets again after the split
     assert min_gap(result) >= GAP_FLOOR
 
 
-@pytest.mark.xfail(strict=True, reason="engine bug: a same-instant cascade leaves a pair touching (gap exactly 0.0) "
-                   "and slowly opening; it re-closes within heyoka's next step unseen: three equal balls, k = 0.3, "
-                   "bodies 2 and 3 overlap by 0.68 rad and the run ends 'completed'")
 def test_three_equal_bodies_at_the_same_instant_inelastic():
     sc = scene([body(phi="-1.0"), body(phi="0.0"), body(phi="1.0")], k="0.3", t_end="3")
     result = heyroll.simulate(sc)
-    # measured: 4 rows at t = 0.5163 leave (2, 3) at gap 0 opening at 0.0056 rad/s;
-    # no further (2, 3) collision; the gap falls to -0.685 rad; status completed.
+    # before the fix: 4 rows at t = 0.5163 left (2, 3) at gap 0 opening at 0.0056 rad/s;
+    # no further (2, 3) collision; the gap fell to -0.685 rad; status completed.
     assert result.status is Status.COMPLETED
+    table = result.collision_table()
+    first = table["t"][0]
+    later = table[(table["t"] > first) & (table["i"] == 2) & (table["j"] == 3)]
+    assert later.size  # the slowly opening pair is seen to close again
     assert min_gap(result) >= GAP_FLOOR
 
 
-@pytest.mark.xfail(strict=True, reason="engine bug: max_collisions is checked only after a same-instant cascade, "
-                   "which can add up to 64 N rows: three equal balls at k = 0 give 195 rows at one instant and "
-                   "status 'completed' with max_collisions = 2")
 def test_max_collisions_holds_inside_a_same_instant_cascade():
     sc = scene([body(phi="-1.0"), body(phi="0.0"), body(phi="1.0")], k="0.0", t_end="3")
     result = heyroll.simulate(sc, max_collisions=2)
-    # measured: 195 collisions, all at t = 0.5163 s (the plastic sequential impulses
+    # before the fix: 195 collisions, all at t = 0.5163 s (the plastic sequential impulses
     # converge only geometrically and are cut at 64 N rounds), status completed.
     assert result.status is Status.MAX_COLLISIONS and result.n_collisions == 2
+    assert result.message == "stopped after max_collisions = 2 collisions"
 
 
-@pytest.mark.xfail(strict=True, reason="trajectory bug: sample_branches passes np.linspace(t0, t1) to propagate_grid "
-                   "for a branch 1 ulp long (two mode changes 2.2e-16 s apart); the grid repeats values and heyoka "
-                   "raises 'non-monotonic time grid'")
+def test_plastic_collision_of_three_at_one_instant_ends_in_one_cluster():
+    sc = scene([body(phi="-1.0"), body(phi="0.0"), body(phi="1.0")], k="0.0", t_end="3")
+    result = heyroll.simulate(sc)
+    assert result.status is Status.COMPLETED
+    # k = 0: each pair leaves its collision at rest relative to the other and
+    # pressed: contact at once, no endless geometric cascade of impulses.
+    t_hit = float(result.times[0])
+    assert np.all(result.times == t_hit) and result.n_collisions <= 4
+    assert result.mode_changes[-1].clusters == ((1, 2, 3),) and result.mode_changes[-1].t == t_hit
+    G = generalized_masses(sc)
+    before, final = result.states_before[0], result.final_state
+    assert len(set(final[3:].tolist())) == 1
+    assert min_gap(result) >= GAP_FLOOR
+    # equal radii: the impacts keep sum G phi' (0 here, by symmetry: the cluster starts at rest)
+    assert G @ result.mode_changes[-1].state[3:] == pytest.approx(G @ before[3:], abs=1e-12)
+    assert np.allclose(result.mode_changes[-1].state[3:], 0, atol=1e-12)
+
+
 def test_sample_branches_with_a_branch_one_ulp_long():
     sc = scene(
         [body(radius="0.25"), body(radius="0.125", phi="0.43997595479091994"),
@@ -653,15 +689,26 @@ def test_sample_branches_with_a_branch_one_ulp_long():
         law="newton", k="0.0", t_end="5",
     )
     result = heyroll.simulate(sc)
-    # measured: splits at t = 1.9271096213324175 and ...177 s
+    # before the fix (of the engine's cascade too): splits at t = 1.9271096213324175 and ...177 s
     assert result.status is Status.COMPLETED
     assert min_gap(result, points=40) >= GAP_FLOOR
 
 
-@pytest.mark.xfail(strict=True, reason="engine bug: same-instant contacts are not cascaded in cluster modes; a cluster "
-                   "collision that leaves a touching free pair closing (gap -1e-16, closing at 0.005 rad/s) is never "
-                   "resolved: bodies 3 and 4 overlap by 2.1 rad by t = 1 s (status overlap) and 3.0 rad over 5 s "
-                   "(status completed)")
+def test_sample_branches_keeps_each_time_once():
+    sc = scene([body(phi="-0.5"), body(phi="0.5")], t_end="1")
+    result = heyroll.simulate(sc)
+    t0 = float(result.t_final)
+    t1 = math.nextafter(t0, math.inf)
+    assert np.unique(np.linspace(t0, t1, 40)).size < 40  # what np.linspace gives for a branch 1 ulp long
+    from dataclasses import replace
+
+    from heyroll.simulation.driver import ModeChange
+
+    short = replace(result, t_final=t1, mode_changes=result.mode_changes + (ModeChange(t0, (), tuple(result.final_state)),))
+    last = sample_branches(short, points=40)[-1]
+    assert last.times[0] == t0 and last.times[-1] == t1 and np.all(np.diff(last.times) > 0)
+
+
 def test_same_instant_contacts_next_to_a_cluster_are_resolved():
     sc = scene(
         [body(radius="0.25", phi="-1.0"), body(radius="0.25", phi="-0.32032618109175509"),
@@ -669,23 +716,119 @@ def test_same_instant_contacts_next_to_a_cluster_are_resolved():
          body(radius="0.25", mass="2.0", phi="1.2890214567247338")], k="0.125", t_end="1",
     )
     result = heyroll.simulate(sc)
-    # measured: (1, 2) in contact from t = 0; body 3 bounces between the cluster and
-    # body 4 ever faster; at t = 0.2906267 a (3, 4) row and a (2, 3) cluster row share
-    # one instant and leave (3, 4) closing; the gap never recovers.
+    # before the fix: (1, 2) in contact from t = 0; body 3 bounced between the cluster and
+    # body 4 ever faster; at t = 0.2906267 a (3, 4) row and a (2, 3) cluster row shared
+    # one instant and left (3, 4) closing; the gap never recovered.
     assert result.status is Status.COMPLETED
     assert min_gap(result) >= GAP_FLOOR
+    # after every group of rows at one instant no touching pair closes
+    table = result.collision_table()
+    for a, b in same_instant_groups(table):
+        after = result.states_after[b - 1]
+        gaps = pair_gaps(sc, after)[0]
+        rates = np.array([after[4 + p.j] - after[4 + p.i] for p in sc.pairs])
+        assert not np.any((np.abs(gaps) < 1e-12) & (rates < 0))
 
 
-@pytest.mark.xfail(strict=True, reason="engine bug: when a contact across the top (wrap pair (N, 1), a cluster "
-                   "whose first member is body N) splits, the units come out ordered (N), (1), ...; with no cluster "
-                   "left the engine takes the unit state for the body state, so bodies swap states: angles jump by "
-                   "2 pi, the gap of (1, 2) reads -6.4 rad, status overlap")
 def test_contact_across_the_top_splits_cleanly():
     sc = scene([body(phi="-0.5"), body(phi="0.5", dphi="8.5")], k="0.0", t_end="5")
     result = heyroll.simulate(sc)
-    # measured: ball 2 goes over the top and hits ball 1 from behind at t = 0.7795 s
+    # before the fix: ball 2 goes over the top and hits ball 1 from behind at t = 0.7795 s
     # (plastic: contact (2, 1)); the contact splits at 1.1243 s; from then on body 1
-    # carries body 2's state and vice versa (phi = [-7.568, -1.507] at 2.7413 s).
-    assert result.contact_intervals[0]["i"] == 2 and result.contact_intervals[0]["j"] == 1
+    # carried body 2's state and vice versa (phi = [-7.568, -1.507] at 2.7413 s).
+    contact = result.contact_intervals[0]
+    assert contact["i"] == 2 and contact["j"] == 1 and not contact.get("open")
     assert result.status is Status.COMPLETED
     assert min_gap(result) >= GAP_FLOOR
+    # the split keeps every body's own state: both still in contact, at one rate
+    split = next(m for m in result.mode_changes if m.t == contact["t_end"])
+    merged = next(m for m in result.mode_changes if m.t == contact["t_start"])
+    assert split.clusters == () and merged.clusters == ((2, 1),)
+    assert split.state[2] == split.state[3]
+    assert pair_gaps(sc, np.array(split.state))[0, 1] == pytest.approx(0, abs=1e-13)
+
+
+def test_max_collisions_holds_when_the_last_collision_starts_a_contact():
+    sc = scene([body(phi="-1.0"), body(mass="2.0", phi="0.0"), body(mass="0.5", phi="0.9")], k="0.5", t_end="10")
+    full = heyroll.simulate(sc)
+    merging = int(np.flatnonzero(full.times == full.mode_changes[1].t)[-1]) + 1  # measured: collision 23
+    result = heyroll.simulate(sc, max_collisions=merging)
+    # before the fix: status max_collisions, message "stopped after max_collisions = 23", 24 collisions
+    assert result.status is Status.MAX_COLLISIONS and result.n_collisions == merging
+    assert np.array_equal(result.times, full.times[:merging])
+
+
+# -- the overlap guard ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "case", ["touching start", "after a split", "after a cascade"],
+)
+def test_a_missed_collision_never_ends_completed(case, monkeypatch):
+    """With the gap opening switched off (the bugs above come back) the guard stops the run: status overlap."""
+    from heyroll.simulation import events
+
+    scenes = {
+        "touching start": scene([body(phi="0.0"), body(mass="2.0", phi="0.2226820286819278", dphi="0.02")],
+                                k="0.5", t_end="2"),
+        "after a split": scene(
+            [body(radius="0.20552171037334813", phi="-1.5492089749104005"),
+             body(radius="0.12647999996429304", phi="-1.1596784170279733")], k="0.0", t_end="5",
+        ),
+        "after a cascade": scene([body(phi="-1.0"), body(phi="0.0"), body(phi="1.0")], k="0.3", t_end="3"),
+    }
+    sc = scenes[case]
+    fixed = heyroll.simulate(sc)
+    monkeypatch.setattr(events, "OPEN_ULPS", 0)  # opening a gap by 0 ulps: exactly 0.0 stays
+    broken = heyroll.simulate(sc)
+    assert fixed.status is Status.COMPLETED
+    assert broken.status is Status.OVERLAP and not broken.success
+    assert "a collision was missed" in broken.message
+    t = float(re.search(r"at t = (\S+) s", broken.message).group(1))
+    assert t == float(broken.t_final) < float(sc.run.t_end)
+    # stopped where the gap reached -overlap_tolerance, not later
+    from heyroll.simulation.system import overlap_tolerance
+
+    gaps = pair_gaps(sc, broken.final_state)[0]
+    worst = int(np.argmin(gaps))
+    p = sc.pairs[worst]
+    assert gaps[worst] == pytest.approx(-overlap_tolerance(broken.final_state[p.j]), rel=1e-3)
+
+
+@pytest.mark.parametrize("phi", ["0.0", "1e-10"])
+def test_plastic_collision_where_the_gap_acceleration_changes_sign_starts_a_contact(phi):
+    # Found by tests/test_fuzz.py. A particle and a ball of radius r touch across
+    # one radius (beta = 0), so their gap acceleration (a_1 - a_2) sin phi vanishes
+    # at the bottom. The ball hits the particle there, plastically: the pair moves on
+    # together with gap'' ~ 0 now (0, or +3e-10 rad/s^2 at phi = 1e-10) but closing at
+    # once (jerk < 0: the particle is the stiffer pendulum; the gap rises by
+    # a^3 / (3 J^2) ~ 1e-30 rad before it closes). Before the fix this was not
+    # "pressed": no contact, the gap closed unseen (as t^3) and the guard stopped
+    # the run at t = 9e-5 s (status overlap).
+    sc = scene([body(shape="particle", radius=None, mass="2.8", phi=phi),
+                body(radius="0.02", mass="5.5", phi=repr(float(phi) + 1e-12), dphi="-4.0")],
+               law="newton_generalized", k="0.0", t_end="1.5")
+    assert sc.pairs[0].beta == 0
+    result = heyroll.simulate(sc)
+    assert result.status is Status.COMPLETED
+    assert result.n_collisions == 1 and float(result.times[0]) == pytest.approx(1e-12 / 4.0, rel=1e-3)
+    contact = result.contact_intervals[0]
+    assert (contact["i"], contact["j"]) == (1, 2) and contact["t_start"] == float(result.times[0])
+    assert min_gap(result) >= GAP_FLOOR
+
+
+def test_bounce_model_of_the_contact_criterion():
+    from heyroll.simulation.events import _bounce_height, _first_return
+
+    # J = 0: the parabola of the Zeno criterion, up for 2v/A, h = v^2 / (2A)
+    v, A = 1e-3, 2.0
+    assert _first_return(v, -A, 0.0) == pytest.approx(2 * v / A, rel=1e-15)
+    assert _bounce_height(v, -A, 0.0, 2 * v / A) == pytest.approx(v * v / (2 * A), rel=1e-12)
+    # a ~ 0 > J: back after 3a/|J|, h = a^3 / (3 J^2)
+    a, J = 3e-10, -5.0
+    assert _first_return(0.0, a, J) == pytest.approx(3 * a / -J, rel=1e-12)
+    assert _bounce_height(0.0, a, J, 3 * a / -J) == pytest.approx(a**3 / (3 * J * J), rel=1e-9)
+    # pressed from the start, or never back
+    assert _first_return(0.0, -1.0, 0.0) == 0.0 and _first_return(0.0, 0.0, -1.0) == 0.0
+    assert _first_return(0.0, 1.0, 1.0) is None and _first_return(1.0, 1.0, 0.0) is None
+    assert _first_return(0.0, 0.0, 0.0) is None  # at rest, no force: not pressed

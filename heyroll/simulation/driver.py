@@ -25,11 +25,18 @@ from ..model.scene import Scene
 from .events import CollisionLog, StopRequest, mode_events, mode_handlers
 from .precision import DOUBLE, Precision
 from .result import SimulationResult, Status
-from .system import SceneSystem, Unit, build_system, cluster_unit, gap_value, singleton_units, unit_acceleration
+from .system import (
+    SceneSystem, Unit, build_system, cluster_unit, gap_value, overlap_tolerance, singleton_units, unit_acceleration,
+)
 
-#: A gap below -OVERLAP_TOLERANCE rad at the end of a run means a collision
-#: was missed; the run is then reported as failed, never as a success.
-OVERLAP_TOLERANCE = 1e-9
+#: A gap below -overlap_tolerance (system.py) means a collision was missed:
+#: the run stops with status overlap, never a success. Gaps are watched all
+#: along the run by a guard event per pair, and checked at the start and end
+#: of every mode and at the end of the run (every pair, watched or not).
+
+#: A run that changes contact mode more than this many times N at one instant
+#: (merging and splitting for ever) stops with status failed.
+MAX_CHANGES_AT_ONE_INSTANT = 8
 
 
 class CollisionSink(Protocol):
@@ -129,10 +136,13 @@ def simulate(
     start_limit = _track_limit_at_start(scene, full_state)
     if start_limit:
         log.stop.reason, log.stop.message = start_limit
+    split_pair = None  # scene pair index of a contact that has just split
+    same_instant = 0  # mode changes in a row at one instant (bounded: see MAX_CHANGES_AT_ONE_INSTANT)
     while limit != 0 and not start_limit:
         system = first_system if first else build_system(scene, precision, pairs=pairs, units=units)
+        first = False
         holder: list = [None]
-        handlers, warnings = mode_handlers(scene, system, log, holder, time_scale)
+        handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale)
         ta, slots, nt_slots = _integrator(system, options, precision.number(precision.epsilon * time_scale))
         slots[:], nt_slots[:] = handlers, warnings
         ta.pars[:] = system.parameters
@@ -143,15 +153,36 @@ def simulate(
         holder[0] = ta.state
         stream.ta = ta
         _reset(log.stop)
-        if first:
-            _collide_touching_pairs(system, handlers, ta, holder)
-            first = False
-        if log.stop.reason is None:
-            outcome, n_steps = _propagate(ta, log, precision.number(t_end))
-            steps += n_steps
+        # Pairs touching as the mode starts (bodies that start so, the rest of a
+        # cascade, a contact that has just split): collide, enter contact, or
+        # open by a few ulps so that their events can see them close again.
+        skip_merge = {n for n, c in enumerate(system.contacts) if c.pair_index == split_pair}
+        split_pair = None
+        if settle(ta.state, ta.time, range(system.n_units), None, skip_merge):
+            full_state = system.expand(ta.state.tolist())
+            modes[-1] = ModeChange(modes[-1].t, modes[-1].clusters, tuple(full_state))
+            overlap = _overlap(scene, precision, full_state, "at the start of a mode")
+            if overlap:
+                log.stop.reason, log.stop.message = "overlap", overlap
+            else:
+                outcome, n_steps = _propagate(ta, log, precision.number(t_end))
+                steps += n_steps
         full_state = system.expand(ta.state.tolist())
         t = ta.dtime
         reason = log.stop.reason
+        if reason in ("merge", "split"):
+            overlap = _overlap(scene, precision, full_state, "at the end of a mode")
+            if overlap:
+                log.stop.reason, log.stop.message = "overlap", overlap
+                break
+            same_instant = same_instant + 1 if float(t[0]) == modes[-1].t else 0
+            if same_instant > MAX_CHANGES_AT_ONE_INSTANT * len(scene.bodies):
+                log.stop.reason = "failed"
+                log.stop.message = (
+                    f"contacts kept merging and splitting at t = {float(t[0]):.17g} s "
+                    f"({same_instant} mode changes at one instant); stopped"
+                )
+                break
         if reason == "merge":
             contact = system.contacts[log.stop.data["contact"]]
             units, full_state = _merge(scene, system, units, contact, full_state)
@@ -160,6 +191,7 @@ def simulate(
             link = system.links[log.stop.data["link"]]
             units = _split(scene, units, link)
             i, j = _link_bodies(system, link)
+            split_pair = link.pair_index
             intervals.append({"i": i + 1, "j": j + 1, "t_start": contacts_open.pop((i, j)), "t_end": float(t[0])})
         else:
             break
@@ -172,7 +204,7 @@ def simulate(
     status, message = _status(log, outcome, t_end)
     final_state = np.array(full_state)
     if status.success:
-        overlap = _overlap(scene, precision, final_state)
+        overlap = _overlap(scene, precision, final_state, "at the end of the run")
         if overlap:
             status, message = Status.OVERLAP, overlap
     if log.fallbacks and status.success:
@@ -285,7 +317,19 @@ def _split(scene, units, link):
     left, right = unit.members[: m + 1], unit.members[m + 1:]
     left = cluster_unit(scene, left) if len(left) > 1 else Unit(left, (mpmath.mpf(0),))
     right = cluster_unit(scene, right) if len(right) > 1 else Unit(right, (mpmath.mpf(0),))
-    return tuple(units[: link.unit]) + (left, right) + tuple(units[link.unit + 1:])
+    return _canonical(tuple(units[: link.unit]) + (left, right) + tuple(units[link.unit + 1:]))
+
+
+def _canonical(units):
+    """The units in circular order starting from the one that holds body 1.
+
+    The order is what the compiled system and the state layout follow; with
+    no cluster it must be bodies 1..N (the free-mode state is the body
+    state). A contact across the top (bodies N, 1) that splits leaves (N),
+    (1), ...: rotated here to (1), ..., (N).
+    """
+    first = next(n for n, u in enumerate(units) if 0 in u.members)
+    return tuple(units[first:]) + tuple(units[:first])
 
 
 def _initial_contacts(scene, precision, pairs, units, full_state, system=None):
@@ -329,23 +373,6 @@ def _track_limit_at_start(scene: Scene, state) -> tuple[str, str] | None:
             if abs(friction) > mu * normal:
                 return "slip", f"body {k + 1} slips from the start: the friction needed to roll exceeds mu N {where}"
     return None
-
-
-def _collide_touching_pairs(system, handlers, ta, holder) -> None:
-    """Bodies that start touching and approaching collide at t = 0.
-
-    An event cannot see a root at the very start of a step, so such a
-    collision is applied here, by the same callback.
-    """
-    state = holder[0].tolist()
-    nu = system.n_units
-    for number, contact in enumerate(system.contacts):
-        gap = gap_value(system, number, state)
-        closing = state[nu + contact.unit_a] - state[nu + contact.unit_b]
-        scale = 1 + abs(state[contact.unit_a]) + abs(state[contact.unit_b])
-        if gap <= 4 * system.precision.epsilon * scale and closing > 0:
-            if not handlers[number](ta, -1):
-                return
 
 
 def records_to_arrays(records: list, n_bodies: int) -> tuple:
@@ -421,20 +448,21 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
         return Status.INTERRUPTED, log.stop.message
     if reason in ("left_track", "slip"):
         return Status(reason), log.stop.message
+    if reason == "overlap":
+        return Status.OVERLAP, log.stop.message
+    if reason == "failed":
+        return Status.FAILED, log.stop.message
     if outcome == hy.taylor_outcome.time_limit:
         return Status.COMPLETED, f"reached t_end = {float(t_end):.17g} s after {log.count} collisions"
     return Status.FAILED, f"the integrator stopped with outcome {outcome!s}"
 
 
-def _overlap(scene: Scene, precision: Precision, state) -> str:
-    n = len(scene.bodies)
+def _overlap(scene: Scene, precision: Precision, state, where: str) -> str:
+    """A message if a pair's gap is below -overlap_tolerance in ``state`` (a full state), else ''."""
     for p in scene.pairs:
         gap = float(state[p.j]) - float(state[p.i]) + float(p.gap_constant())
-        if gap < -OVERLAP_TOLERANCE:
-            return (
-                f"bodies {p.i + 1} and {p.j + 1} overlap at the end of the run (gap {gap:.3g} rad): "
-                "a collision was missed"
-            )
+        if gap < -overlap_tolerance(state[p.j]):
+            return f"bodies {p.i + 1} and {p.j + 1} overlap {where} (gap {gap:.3g} rad): a collision was missed"
     return ""
 
 

@@ -13,6 +13,12 @@ afterwards, vectorized. The callback also judges the outcome:
 * the bodies are pressed together (the gap's acceleration is closing) and
   the bounces that remain are below the run's resolution: the pair enters
   persistent contact (see :func:`below_resolution`).
+
+Pairs left touching at the same instant (by the collision's neighbours, at
+the start of a mode, after a split) are settled by :func:`contact_settler`:
+collided, put in contact, or opened by a few ulps so that heyoka can see
+them close again (see there). A last guard event per pair stops the run
+with status ``overlap`` if a gap ever goes below -overlap_tolerance anyway.
 """
 
 from __future__ import annotations
@@ -27,15 +33,20 @@ import numpy as np
 
 from ..model.laws import GeneralizedNewtonLaw, ImpulseMap, impulse_map
 from ..model._numbers import workprec
-from .system import SceneSystem, unit_acceleration
+from .system import SceneSystem, overlap_tolerance, unit_acceleration, unit_jerk
 
 #: A post-collision separation rate within this many ulps of zero (relative to
 #: the approach rate) counts as no separation (a plastic outcome).
 SEPARATION_ULPS = 64
 
 #: Resolution of a run, in ulps: bounces whose height or remaining duration
-#: fall below it cannot be told apart from rest in contact.
+#: fall below it cannot be told apart from rest in contact; a gap within it
+#: of zero is touching.
 RESOLUTION_ULPS = 64
+
+#: A touching pair that is not closing starts the next step with its gap more
+#: than this many ulps (of 1 + |psi_a| + |psi_b|) open (see contact_settler).
+OPEN_ULPS = 8
 
 
 @dataclass
@@ -72,27 +83,36 @@ class CollisionLog:
         return self.flushed + len(self.records)
 
 
-def mode_handlers(scene, system: SceneSystem, log: CollisionLog, holder: list, time_scale: float) -> tuple[list, list]:
+def mode_handlers(
+    scene, system: SceneSystem, log: CollisionLog, holder: list, time_scale: float
+) -> tuple[list, list, object]:
     """The callbacks of one contact mode, in the order of :func:`mode_events`.
 
-    Returns (terminal handlers, non-terminal handlers). ``holder[0]`` must be
-    set to the integrator's state array (a view into heyoka's buffer) before
-    integrating; the handlers use it to avoid re-wrapping the buffer at every
-    collision.
+    Returns (terminal handlers, non-terminal handlers, settle), ``settle``
+    the mode's :func:`contact_settler` (the driver calls it at the start of
+    the mode). ``holder[0]`` must be set to the integrator's state array (a
+    view into heyoka's buffer) before integrating; the handlers use it to
+    avoid re-wrapping the buffer at every collision.
     """
     fast = not any(u.is_cluster for u in system.units)
     handlers: list = []
-    # Three or more bodies: contacts can close at the same instant.
-    cascade = simultaneous_contacts(system, handlers) if fast and system.n_bodies > 2 else None
+    resolvers: list = []
+    settle = contact_settler(scene, system, resolvers, log, time_scale)
+    # Three or more units: contacts can close at the same instant.
+    cascade = settle if system.n_units > 2 else None
     for number in range(len(system.contacts)):
         if fast:
-            handlers.append(_make_callback(scene, system, number, log, holder, time_scale, cascade))
+            handler = _make_callback(scene, system, number, log, holder, time_scale, cascade)
+            resolvers.append(lambda s, t, resolve=handler.resolve: resolve(s, s.tolist(), t))
         else:
-            handlers.append(_make_unit_callback(scene, system, number, log, holder, time_scale))
+            handler = _make_unit_callback(scene, system, number, log, holder, time_scale, settle)
+            resolvers.append(handler.resolve)
+        handlers.append(handler)
     handlers += [_stopper(log, "split", {"link": number}) for number in range(len(system.links))]
     handlers += [_track_stopper(log, ev, holder, system) for ev in system.track_events if ev.terminal]
+    handlers += [_overlap_stopper(log, number, holder, system) for number in range(len(system.contacts))]
     warnings = [_track_warning(log, ev, system) for ev in system.track_events if not ev.terminal]
-    return handlers, warnings
+    return handlers, warnings, settle
 
 
 def mode_events(system: SceneSystem, cooldown, slots: list, nt_slots: list) -> tuple[list, list]:
@@ -101,7 +121,9 @@ def mode_events(system: SceneSystem, cooldown, slots: list, nt_slots: list) -> t
     The indirection lets one compiled integrator serve many runs of the same
     shape: each run puts its own handlers (:func:`mode_handlers`) in the slots.
     Collisions (gap closing), contact splits (contact force reaching 0,
-    decreasing) and track limits are terminal; track warnings are not.
+    decreasing), track limits and overlap guards (gap reaching
+    -overlap_tolerance: a missed collision) are terminal; track warnings are
+    not.
     """
     options = system.precision.integrator_options()
     negative = hy.event_direction.negative
@@ -123,6 +145,7 @@ def mode_events(system: SceneSystem, cooldown, slots: list, nt_slots: list) -> t
     ]
     expressions = list(system.link_expressions)
     expressions += [x for x, ev in zip(system.track_expressions, system.track_events) if ev.terminal]
+    expressions += list(system.guard_expressions)
     events += [
         hy.t_event(x, callback=forward(len(system.gap_expressions) + n), direction=negative, **options)
         for n, x in enumerate(expressions)
@@ -177,7 +200,23 @@ def _track_stopper(log, event, holder, system):
     return stop
 
 
-def below_resolution(opening, gap_acceleration, restitution, t, scale, time_scale, eps) -> bool:
+def _overlap_stopper(log, number, holder, system):
+    contact = system.contacts[number]
+
+    def stop(ta, d_sgn):
+        full = system.expand(holder[0].tolist())
+        i, j = contact.pair.i, contact.pair.j
+        log.stop.reason = "overlap"
+        log.stop.message = (
+            f"bodies {i + 1} and {j + 1} overlap at t = {float(ta.time):.17g} s (gap below "
+            f"-{overlap_tolerance(full[j]):.3g} rad): a collision was missed; stopped"
+        )
+        return False
+
+    return stop
+
+
+def below_resolution(opening, gap_acceleration, restitution, t, scale, time_scale, eps, gap_jerk=0.0) -> bool:
     """Whether the bounces left after a collision are below the run's resolution.
 
     Bodies pressed together (gap acceleration -A < 0) that separate at rate v
@@ -187,14 +226,50 @@ def below_resolution(opening, gap_acceleration, restitution, t, scale, time_scal
     point). When T is below the time resolution of the run or h below the
     resolution of the gap, no further bounce can be resolved and the pair is
     taken to be in persistent contact from now on.
+
+    The bounce is that of the gap's Taylor polynomial to third order,
+    g(t) = v t + a t^2/2 + J t^3/6 (a = gap acceleration, J = its jerk): with
+    J = 0 the figures above. The jerk matters where a ~ 0: a pair that moves
+    on together through the point where its gap acceleration changes sign
+    (a plastic collision at the bottom of two pendulums of different
+    stiffness) rises by a^3/(3 J^2) and closes again after 3a/|J|: a contact
+    if that is below resolution. (At a contact split J > 0: it opens.)
     """
-    if gap_acceleration >= 0:
-        return False
-    A = -gap_acceleration
     v = max(opening, 0.0)
-    h = v * v / (2 * A)
-    remaining = 2 * v / (A * (1 - restitution)) if restitution < 1 else math.inf
-    return h <= RESOLUTION_ULPS * eps * scale or remaining <= RESOLUTION_ULPS * eps * (abs(t) + time_scale)
+    a, J = gap_acceleration, gap_jerk
+    duration = _first_return(v, a, J)  # the bounce's: g(duration) = 0
+    if duration is None:
+        return False
+    height = _bounce_height(v, a, J, duration)
+    remaining = duration / (1 - restitution) if restitution < 1 else math.inf
+    return height <= RESOLUTION_ULPS * eps * scale or remaining <= RESOLUTION_ULPS * eps * (abs(t) + time_scale)
+
+
+def _first_return(v, a, J):
+    """Smallest t >= 0 with v + a t/2 + J t^2/6 = 0 (g(t)/t, g as in below_resolution), or None."""
+    if v == 0 and (a < 0 or (a == 0 and J < 0)):
+        return 0.0  # closing from the start: pressed
+    roots = _positive_roots(J / 6, a / 2, v)
+    return roots[0] if roots else None
+
+
+def _bounce_height(v, a, J, duration) -> float:
+    """max of g(t) = v t + a t^2/2 + J t^3/6 over [0, duration]."""
+    g = lambda t: v * t + a * t * t / 2 + J * t * t * t / 6  # noqa: E731
+    peaks = [t for t in _positive_roots(J / 2, a, v) if t < duration]  # g'(t) = 0
+    return max([0.0, g(duration)] + [g(t) for t in peaks])
+
+
+def _positive_roots(c2, c1, c0) -> list:
+    """Positive real roots of c2 t^2 + c1 t + c0, ascending (stable formula)."""
+    if c2 == 0:
+        return [-c0 / c1] if c1 != 0 and -c0 / c1 > 0 else []
+    disc = c1 * c1 - 4 * c2 * c0
+    if disc < 0:
+        return []
+    q = -(c1 + math.copysign(math.sqrt(disc), c1)) / 2
+    roots = [q / c2] + ([c0 / q] if q != 0 else [])
+    return sorted(r for r in roots if r > 0)
 
 
 @functools.lru_cache(maxsize=256)
@@ -276,7 +351,8 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     """The hot path: every body free, the state is [phi_1..phi_N, dphi_1..dphi_N].
 
     Returns the event callback; its ``resolve(s, before, t)`` applies the law
-    to the pair alone (also used by ``cascade`` for simultaneous contacts).
+    to the pair alone (also used by ``cascade``, the mode's contact settler,
+    for contacts at the same instant).
     """
     contact = system.contacts[number]
     pair = contact.pair
@@ -299,13 +375,19 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     strict = scene.on_inconsistent == "error"
     a_i_stiff = float(scene.track.angular_stiffness(scene.bodies[i], scene.g))
     a_j_stiff = float(scene.track.angular_stiffness(scene.bodies[j], scene.g))
-    sin = math.sin
+    sin, cos = math.sin, math.cos
     # below_resolution can only hold if v^2 <= 2 A h_res or v <= A (1 - k) t_res / 2, A <= a_i + a_j.
     h_bound = 2 * (a_i_stiff + a_j_stiff) * RESOLUTION_ULPS * eps
     t_bound = (a_i_stiff + a_j_stiff) * (1 - k) * RESOLUTION_ULPS * eps / 2
 
     def resolve(s, before, t) -> bool:
-        """Apply the law (or the policy) to this pair, record it; False: stop the run."""
+        """Apply the law (or the policy) to this pair, record it; False: stop the run.
+
+        The run stops (status max_collisions) as soon as the limit-th
+        collision is recorded, wherever it happens: in the event callback, in
+        a cascade of contacts at the same instant, at the start of a mode,
+        before a persistent contact it would start.
+        """
         vi = before[vi_index]
         vj = before[vj_index]
         if extended:
@@ -338,6 +420,10 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         append((t, pair_index, before, vi_new, vj_new, flag))
         s[vi_index] = vi_new
         s[vj_index] = vj_new
+        if limit is not None and log.flushed + len(records) >= limit:
+            stop.reason = "max_collisions"
+            stop.message = f"stopped after max_collisions = {limit} collisions"
+            return False
         return True
 
     def on_collision(ta, d_sgn):
@@ -346,21 +432,21 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         t = ta.time
         if not resolve(s, before, t):
             return False
-        if cascade is not None and not cascade(s, t, (i, j)):
+        # This pair's event is in heyoka's cooldown: the settler leaves its gap alone.
+        if cascade is not None and not cascade(s, t, (i, j), number):
             return False
         # Persistent contact? Only a slow separation can qualify: test that
         # first with |gap''| <= a_i + a_j, then judge with the actual gap''.
-        opening = s[vj_index] - s[vi_index] if cascade is not None else records[-1][4] - records[-1][3]
+        vi_new, vj_new = (s[vi_index], s[vj_index]) if cascade is not None else (records[-1][3], records[-1][4])
+        opening = vj_new - vi_new
         phi_i, phi_j = before[i], before[j]
         if opening * opening <= h_bound * (1 + abs(phi_i) + abs(phi_j)) or opening <= t_bound * (abs(t) + time_scale):
             gap_acc = a_i_stiff * sin(phi_i) - a_j_stiff * sin(phi_j)
-            if below_resolution(opening, gap_acc, k, float(t), 1 + abs(phi_i) + abs(phi_j), time_scale, eps):
+            gap_jerk = a_i_stiff * cos(phi_i) * vi_new - a_j_stiff * cos(phi_j) * vj_new
+            scale = 1 + abs(phi_i) + abs(phi_j)
+            if below_resolution(opening, gap_acc, k, float(t), scale, time_scale, eps, gap_jerk):
                 stop.reason, stop.data = "merge", {"contact": number}
                 return False
-        if limit is not None and log.flushed + len(records) >= limit:
-            stop.reason = "max_collisions"
-            stop.message = f"stopped after max_collisions = {limit} collisions"
-            return False
         if len(records) >= log.chunk_size:
             log.on_full()
         return True
@@ -369,53 +455,143 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     return on_collision
 
 
-def simultaneous_contacts(system: SceneSystem, callbacks: list):
-    """Sequential impulses for contacts that close at the same instant (three or more bodies).
+def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionLog, time_scale: float):
+    """``settle(s, t, units, skip_open=None, skip_merge=()) -> bool``: pairs touching at one instant.
 
-    After a collision, any other pair of the two bodies' neighbours that
-    touches (gap within a few ulp) and still closes is resolved at the same
-    instant by its own law, and so on until no touching pair closes: the
-    classic sequential-impulse treatment of simultaneous impacts (momentum is
-    kept, and energy at k = 1; for unequal bodies the outcome can depend on
-    the order, a known property of simultaneous impacts). Collisions resolved
-    here are ordinary rows of the table, at the same t.
+    Called after a collision (on the two units it involved: contacts closing
+    at the same instant) and at the start of every mode (on all units).
+    Every watched pair of those units' neighbours whose gap is within
+    RESOLUTION_ULPS of zero is
+
+    * **closing**: resolved now by its own law (``resolvers[number](s, t)``),
+      and its units' neighbours are looked at again: the classic
+      sequential-impulse treatment of simultaneous impacts (momentum is kept,
+      and energy at k = 1; for unequal bodies the outcome can depend on the
+      order, a known property of simultaneous impacts). Collisions resolved
+      here are ordinary rows of the table, at the same t. A cascade that has
+      not ended after 64 N collisions is an accumulation at one instant: the
+      pair enters persistent contact.
+    * **pressed and not opening faster than the run can resolve** (gap
+      acceleration closing, :func:`below_resolution`): persistent contact
+      (``stop.reason = "merge"``), unless the contact is in ``skip_merge``
+      (the pair whose contact just split: its contact force has just turned
+      to pulling, it opens).
+    * **opening, or at rest and not pressed**: its gap is opened to
+      2 OPEN_ULPS ulps (of 1 + |psi_a| + |psi_b|: ~4e-15 rad near the
+      bottom) by moving one unit that far.
+      heyoka cannot see a root of an event function that is exactly 0.0 at
+      the start of a step (pure heyoka: x'' = -1, x(0) = 0, x'(0) = 0.01, an
+      event on x, direction negative: the root at t = 0.02 is missed; with
+      x(0) = 1e-300 it is found). A pair left touching and opening slowly
+      while pressed (after a cascade, after a split, a scene that starts
+      touching) re-closes within that first step, and would pass through
+      unseen; a gap a few ulps open is seen to close. The move is below the
+      run's resolution (the gap's own rounding); the unit with the roomier
+      other side moves. ``skip_open``: the contact whose event just fired
+      (heyoka's cooldown covers it).
+
+    False: the run stops (``log.stop`` says why).
     """
-    nb = system.n_bodies
+    nu = system.n_units
     eps = system.precision.epsilon
-    by_body: dict[int, list[int]] = {}
+    k = float(scene.law.restitution)
+    stop = log.stop
+    by_unit: dict[int, list[int]] = {}
+    left_of: dict[int, int] = {}
+    right_of: dict[int, int] = {}
     geometry = []
     for number, c in enumerate(system.contacts):
-        by_body.setdefault(c.pair.i, []).append(number)
-        by_body.setdefault(c.pair.j, []).append(number)
+        by_unit.setdefault(c.unit_a, []).append(number)
+        by_unit.setdefault(c.unit_b, []).append(number)
+        right_of[c.unit_a] = number
+        left_of[c.unit_b] = number
         with workprec():
-            geometry.append((c.pair.i, c.pair.j, float(c.pair.offset - c.pair.beta)))
+            constant = float(c.pair.offset - c.pair.beta - system.units[c.unit_a].offsets[-1])
+        geometry.append((c.unit_a, c.unit_b, constant))
+    max_rounds = 64 * system.n_bodies
 
-    def cascade(s, t, bodies) -> bool:
-        pending = list(bodies)
+    def gap(s, number):
+        a, b, constant = geometry[number]
+        return s[b] - s[a] + constant
+
+    def room(s, number, moving) -> float:
+        """Gap of the moving unit's other contact (inf: none watched)."""
+        other = right_of.get(moving) if moving == geometry[number][1] else left_of.get(moving)
+        return math.inf if other is None or other == number else gap(s, other)
+
+    def open_gap(s, number, scale):
+        """Open a touching gap to 2 OPEN_ULPS ulps; the unit moved, or None if no unit has room."""
+        a, b, _ = geometry[number]
+        target = OPEN_ULPS * eps * scale
+        for _ in range(8):
+            delta = 2 * target - gap(s, number)
+            if room(s, number, b) - delta >= target:
+                s[b] = s[b] + delta
+                moved = b
+            elif room(s, number, a) - delta >= target:
+                s[a] = s[a] - delta
+                moved = a
+            else:
+                return None
+            if gap(s, number) > target:
+                return moved
+        return moved
+
+    def settle(s, t, units, skip_open=None, skip_merge=()) -> bool:
+        # Impulses first (positions frozen: every collision of the instant sees
+        # the same positions), then open the pairs left touching.
+        pending = list(units)
+        seen = set(pending)
         rounds = 0
-        while pending and rounds < 64 * nb:
-            body = pending.pop()
-            for number in by_body.get(body, ()):
-                i, j, constant = geometry[number]
-                gap = s[j] - s[i] + constant
-                closing = s[nb + i] - s[nb + j]
-                if abs(gap) <= RESOLUTION_ULPS * eps * (1 + abs(s[i]) + abs(s[j])) and closing > 0:
-                    rounds += 1
-                    if not callbacks[number].resolve(s, s.tolist(), t):
+        while pending:
+            unit = pending.pop()
+            for number in by_unit.get(unit, ()):
+                a, b, constant = geometry[number]
+                pa, pb = s[a], s[b]
+                scale = 1 + abs(pa) + abs(pb)
+                if abs(pb - pa + constant) > RESOLUTION_ULPS * eps * scale:
+                    continue
+                va, vb = s[nu + a], s[nu + b]
+                opening = vb - va
+                if opening < -SEPARATION_ULPS * eps * (abs(va) + abs(vb)):  # closing: a collision now
+                    if rounds >= max_rounds:
+                        stop.reason, stop.data = "merge", {"contact": number}
                         return False
-                    pending += [i, j]
+                    rounds += 1
+                    if not resolvers[number](s, t):
+                        return False
+                    pending += [a, b]
+                    seen.update((a, b))
+                    continue
+                if number not in skip_merge:
+                    pa, pb, va, vb = float(pa), float(pb), float(va), float(vb)
+                    acc = unit_acceleration(system, b, pb) - unit_acceleration(system, a, pa)
+                    jerk = unit_jerk(system, b, pb, vb) - unit_jerk(system, a, pa, va)
+                    if below_resolution(max(vb - va, 0.0), acc, k, float(t), float(scale), time_scale, eps, jerk):
+                        stop.reason, stop.data = "merge", {"contact": number}
+                        return False
+        for number in sorted({n for unit in seen for n in by_unit.get(unit, ())}):
+            if number == skip_open:
+                continue
+            a, b, constant = geometry[number]
+            scale = 1 + abs(s[a]) + abs(s[b])
+            if abs(gap(s, number)) <= OPEN_ULPS * eps * scale:
+                open_gap(s, number, scale)
         return True
 
-    return cascade
+    return settle
 
 
-def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float):
+def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float,
+                        settle=None):
     """Collisions when some bodies move as clusters: the state holds unit coordinates.
 
     Two free bodies collide by the scene's law (and policy); a collision that
     involves a cluster is Newton's law on psi' with the units' total
     generalized masses (the cluster moves as one rigid unit through the
-    impact), recorded with flag 2.
+    impact), recorded with flag 2. Contacts touching at the same instant are
+    then settled by ``settle`` (:func:`contact_settler`), as in the free mode.
+    Returns the event callback; its ``resolve(s, t)`` applies the law alone.
     """
     contact = system.contacts[number]
     pair = contact.pair
@@ -429,8 +605,8 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
     strict = scene.on_inconsistent == "error"
     stop = log.stop
 
-    def on_collision(ta, d_sgn):
-        s = holder[0]
+    def resolve(s, t) -> bool:
+        """Apply the law (or the policy), record it; False: stop the run (policy, max_collisions)."""
         state = s.tolist()
         before = system.expand(state)
         va, vb = state[nu + a], state[nu + b]
@@ -440,7 +616,7 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
             if strict:
                 stop.reason = "inconsistent"
                 stop.message = (
-                    f"collision {log.count + 1} at t = {float(ta.time):.17g}: bodies {pair.i + 1} and {pair.j + 1} "
+                    f"collision {log.count + 1} at t = {float(t):.17g}: bodies {pair.i + 1} and {pair.j + 1} "
                     f"still approach after the '{system.law_name}' law; stopped (collision.on_inconsistent = 'error')"
                 )
                 return False
@@ -449,20 +625,33 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
             log.fallbacks += 1
         s[nu + a], s[nu + b] = va_new, vb_new
         after = system.expand(s.tolist())
-        log.records.append((ta.time, contact.pair_index, before, None, after, flag))
-        psi_a, psi_b = state[a], state[b]
-        gap_acc = unit_acceleration(system, b, psi_b) - unit_acceleration(system, a, psi_a)
-        if gap_acc < 0 and below_resolution(
-            vb_new - va_new, gap_acc, k, float(ta.time), 1 + abs(psi_a) + abs(psi_b), time_scale, eps
-        ):
-            stop.reason, stop.data = "merge", {"contact": number}
-            return False
+        log.records.append((t, contact.pair_index, before, None, after, flag))
         if log.max_collisions is not None and log.count >= log.max_collisions:
             stop.reason = "max_collisions"
             stop.message = f"stopped after max_collisions = {log.max_collisions} collisions"
+            return False
+        return True
+
+    def on_collision(ta, d_sgn):
+        s = holder[0]
+        t = ta.time
+        if not resolve(s, t):
+            return False
+        if settle is not None and not settle(s, t, (a, b), number):
+            return False
+        state = [float(x) for x in s.tolist()]
+        psi_a, psi_b = state[a], state[b]
+        va_new, vb_new = state[nu + a], state[nu + b]
+        gap_acc = unit_acceleration(system, b, psi_b) - unit_acceleration(system, a, psi_a)
+        gap_jerk = unit_jerk(system, b, psi_b, vb_new) - unit_jerk(system, a, psi_a, va_new)
+        if below_resolution(
+            vb_new - va_new, gap_acc, k, float(t), 1 + abs(psi_a) + abs(psi_b), time_scale, eps, gap_jerk
+        ):
+            stop.reason, stop.data = "merge", {"contact": number}
             return False
         if len(log.records) >= log.chunk_size:
             log.on_full()
         return True
 
+    on_collision.resolve = resolve
     return on_collision

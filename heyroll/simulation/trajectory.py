@@ -71,7 +71,9 @@ def sample_branches(result: SimulationResult, *, max_branches: int | None = None
         system, ta = integrators[clusters]
         ta.time = t0
         ta.state[:] = system.reduce(list(state))
-        grid = np.linspace(t0, t1, points) if t1 > t0 else np.array([t0])
+        # A branch a few ulps long (two events 2e-16 s apart) gives a linspace
+        # with repeated values, which propagate_grid rejects: keep each time once.
+        grid = np.unique(np.linspace(t0, t1, points)) if t1 > t0 else np.array([t0])
         out = np.array(ta.propagate_grid(grid)[-1], dtype=float)
         full = np.array([system.expand(row) for row in out.tolist()])
         branches.append(Branch(times=grid, states=full))
