@@ -487,3 +487,17 @@ def test_a_body_resting_in_a_bowl_presses_on_it():
     track = ArcChainTrack.three_arcs(1, "0.5", "0.2")
     result = simulate_path(PathScene.make(track, [DISK], ["2.0"], [0], track_sides="one", run=RunSettings.make(20)))
     assert result.status.value == "completed" and result.warnings == []
+
+
+def test_plastic_collision_in_a_bowl_stops_as_contact_not_overlap():
+    # measured before the fix (random scene fuzz): k = 0 left the pair pressed together,
+    # the gap went below zero unseen and the run ended 'completed' with a 5 cm overlap
+    track = ArcChainTrack.three_arcs(1, "0.5", "0.2")
+    a = Body.of_shape("solid_sphere", "0.06", mass=1)
+    b = Body.of_shape("ring", "0.05", mass=2)
+    scene = PathScene.make(track, [a, b], ["1.5", "3.3"], ["1.0", "0"], law=heyroll.make_law("newton_generalized", 0),
+                           limiter_restitution=1, run=RunSettings.make(10))
+    result = simulate_path(scene, keep_branches=True)
+    assert result.status.value == "contact" and "stay in contact" in result.message
+    t, X = result.sample(5000)
+    assert scene.gap(0, X[:, 0].astype(float), X[:, 2].astype(float)).min() > -1e-12

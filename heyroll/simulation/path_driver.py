@@ -316,7 +316,7 @@ def _recloses(scene: PathScene, ta, i: int, scale: float) -> bool:
     starts at 0 and never changes sign within a step).
     """
     probe = copy.deepcopy(ta)
-    probe.propagate_for(1e-4 * scale)
+    probe.propagate_for(np.asarray(probe.time).dtype.type(1e-4 * scale))
     x = np.asarray(probe.state, dtype=float)
     return float(scene.gap(i, x[2 * i], x[2 * i + 2])) <= 0.0
 
