@@ -832,3 +832,39 @@ def test_bounce_model_of_the_contact_criterion():
     assert _first_return(0.0, -1.0, 0.0) == 0.0 and _first_return(0.0, 0.0, -1.0) == 0.0
     assert _first_return(0.0, 1.0, 1.0) is None and _first_return(1.0, 1.0, 0.0) is None
     assert _first_return(0.0, 0.0, 0.0) is None  # at rest, no force: not pressed
+
+
+@pytest.mark.parametrize("change", [("g", "1e29"), ("dphi", "-3e16")], ids=["g=1e29", "dphi=-3e16"])
+def test_a_run_heyoka_cannot_advance_stops_in_bounded_time(change):
+    # Found by tests/test_fuzz.py (the CLI on a mutated scene): with a track-force
+    # event of size ~1e29, heyoka 7.13 takes zero-length steps for ever
+    # (propagate_until never returned). The driver now sees the time stand still.
+    key, value = change
+    bodies = [body(phi="-0.5", dphi=value if key == "dphi" else "0.0"),
+              body(shape="disk", radius="0.15", density="7850", phi="0.5", dphi="0.052941176470588235")]
+    text = scene_toml(bodies, k="0.8", t_end="1e-12")
+    sc = parse_scene(text.replace("g = 9.81", f"g = {value}") if key == "g" else text)
+    started = time.perf_counter()
+    result = heyroll.simulate(sc)
+    assert time.perf_counter() - started < 30
+    assert result.status in (Status.COMPLETED, Status.FAILED)
+    if result.status is Status.FAILED:
+        assert result.message.startswith("the integrator does not advance from t = ")
+
+
+@pytest.mark.parametrize("precision", ["quad", "mp:80"])
+def test_same_instant_cascade_in_extended_precision(precision):
+    # The settler judged "touching" with the gap's constant rounded to double: in
+    # quad a freshly collided pair sat 1e-17 rad (the double's rounding) from zero,
+    # far outside quad's 64 ulps. The second impact of the instant was never seen
+    # as touching: bodies 1 and 2 stayed closing and the guard stopped the run.
+    sc = scene([body(phi="-1.0"), body(phi="0.0"), body(phi="1.0")], k="0.3", t_end="1")
+    result = heyroll.simulate(sc, precision=precision)
+    assert result.status is Status.COMPLETED
+    table = result.collision_table()
+    first = table[table["t"] == table["t"][0]]
+    assert first.size >= 3  # (1, 2), (2, 3), then (1, 2) again at the same instant
+    after = np.array(result.states_after[first.size - 1], dtype=float)
+    closing = np.array([after[3] - after[4], after[4] - after[5]]) > 0
+    assert not np.any((np.abs(pair_gaps(sc, after)[0, :2]) < 1e-12) & closing)
+    assert min_gap(result, points=50) >= GAP_FLOOR

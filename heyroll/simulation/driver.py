@@ -255,20 +255,42 @@ def simulate(
     )
 
 
+#: propagate_until is called for at most this many steps at a time, to see
+#: that the integrator advances (see _propagate).
+STEP_CHUNK = 1 << 16
+
+
 def _propagate(ta, log, t_end):
-    """propagate_until with the cyclic GC off and Ctrl-C turned into a clean stop."""
+    """propagate_until with the cyclic GC off and Ctrl-C turned into a clean stop.
+
+    In chunks of STEP_CHUNK steps: a chunk that leaves the time where it was
+    means heyoka is stuck (measured: g = 1e29 with a track-force event makes
+    it take zero-length steps for ever); the run then stops, status failed.
+    """
     # The log grows by one small list per collision: the cyclic garbage
     # collector would rescan it again and again, for nothing (no cycles).
     gc_was_enabled = gc.isenabled()
     gc.disable()
+    steps = 0
     try:
-        result = ta.propagate_until(t_end)
-        return result[0], int(result[3])
+        while True:
+            before = ta.dtime
+            result = ta.propagate_until(t_end, max_steps=STEP_CHUNK)
+            steps += int(result[3])
+            if result[0] != hy.taylor_outcome.step_limit:
+                return result[0], steps
+            if ta.dtime == before:
+                log.stop.reason = "failed"
+                log.stop.message = (
+                    f"the integrator does not advance from t = {float(ta.time):.17g} s ({STEP_CHUNK} steps of "
+                    "zero length): stopped"
+                )
+                return result[0], steps
     except KeyboardInterrupt:
         # Ctrl-C (or SIGTERM turned into it by the CLI): keep every completed collision.
         log.stop.reason = "interrupted"
         log.stop.message = f"interrupted at t = {float(ta.time):.17g} s after {log.count} collisions"
-        return None, 0
+        return None, steps
     finally:
         if gc_was_enabled:
             gc.enable()

@@ -505,8 +505,8 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
         by_unit.setdefault(c.unit_b, []).append(number)
         right_of[c.unit_a] = number
         left_of[c.unit_b] = number
-        with workprec():
-            constant = float(c.pair.offset - c.pair.beta - system.units[c.unit_a].offsets[-1])
+        with workprec():  # in the run's own type: a touching gap is zero to its ulps
+            constant = system.precision.number(c.pair.offset - c.pair.beta - system.units[c.unit_a].offsets[-1])
         geometry.append((c.unit_a, c.unit_b, constant))
     max_rounds = 64 * system.n_bodies
 

@@ -343,11 +343,11 @@ def _track_events(scene: Scene, units, psi, dpsi, par):
 
 
 def gap_value(system: SceneSystem, number: int, unit_state) -> float:
-    """Gap of the number-th watched contact, in rad, from a unit state."""
+    """Gap of the number-th watched contact, in rad, from a unit state (in the state's number type)."""
     c = system.contacts[number]
     a, b = c.unit_a, c.unit_b
     with workprec():
-        constant = float(c.pair.offset - c.pair.beta - system.units[a].offsets[-1])
+        constant = system.precision.number(c.pair.offset - c.pair.beta - system.units[a].offsets[-1])
     return unit_state[b] - unit_state[a] + constant
 
 

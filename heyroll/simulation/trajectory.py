@@ -4,6 +4,8 @@ Between two collisions (or mode changes) the units move independently on
 their own phase curves; each piece is re-integrated from its starting state
 with the scene's event-free system of the mode then in force (the same
 compiled code, no events), so a plot never needs the run to keep dense output.
+Samples are in double whatever the run's precision (for plots and gap checks
+at 1e-12 rad; heyoka's quad and MPFR integrators also take no float state).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from dataclasses import dataclass
 import heyoka as hy
 import numpy as np
 
+from .precision import DOUBLE
 from .result import SimulationResult
 from .system import Unit, build_system, cluster_unit, singleton_units
 
@@ -62,11 +65,8 @@ def sample_branches(result: SimulationResult, *, max_branches: int | None = None
         t1 = breaks[n + 1][0] if n + 1 < len(breaks) else t_stop
         clusters = [c for (tc, _, c) in clusters_at if tc <= t0][-1]
         if clusters not in integrators:
-            system = build_system(scene, result.precision, units=_units(scene, clusters), events=False)
-            ta = hy.taylor_adaptive(
-                system.equations, system.reduce(list(state)), pars=system.parameters,
-                **result.precision.integrator_options(),
-            )
+            system = build_system(scene, DOUBLE, units=_units(scene, clusters), events=False)
+            ta = hy.taylor_adaptive(system.equations, system.reduce(list(state)), pars=system.parameters)
             integrators[clusters] = (system, ta)
         system, ta = integrators[clusters]
         ta.time = t0
