@@ -501,3 +501,14 @@ def test_plastic_collision_in_a_bowl_stops_as_contact_not_overlap():
     assert result.status.value == "contact" and "stay in contact" in result.message
     t, X = result.sample(5000)
     assert scene.gap(0, X[:, 0].astype(float), X[:, 2].astype(float)).min() > -1e-12
+
+
+def test_a_body_pressed_against_a_plastic_limiter_stops_as_contact():
+    # measured before the fix (random scene fuzz): k = 0 at a limiter the curve slopes into
+    # made the body re-hit it every 4.3e-8 s for ever (the run never ended)
+    track = CurveTrack.make("-0.1*x**2*(x**2 - 1)*(23.4256 - (x**2 - 4)**2)", "-1.5", "1.5")
+    ball = Body.of_shape("solid_sphere", "0.08", mass=1)
+    scene = PathScene.make(track, [ball], ["-1.2"], ["-1.0"], limiter_restitution=0, run=RunSettings.make(5))
+    result = simulate_path(scene)
+    assert result.status.value == "contact" and "rest against the lower limiter" in result.message
+    assert len(result.limiter_impacts) == 1

@@ -34,11 +34,18 @@ from .result import Status
 #: this many times in a row are an accumulating (Zeno) sequence.
 ZENO_INTERVAL = 1e-12
 ZENO_REPEATS = 8
+#: Or: consecutive intervals shrink by a ratio below ZENO_RATIO and the rest of
+#: their geometric series lasts less than this (in units of the time scale).
+ZENO_RATIO = 0.99
+ZENO_REMAINING = 1e-7
 #: An outgoing gap rate below -this * |incoming| means the law left the bodies approaching.
 CONSISTENCY_TOLERANCE = 64 * np.finfo(float).eps
 #: A collision leaving the gap opening slower than this fraction of its closing
 #: speed (k ~ 0) may leave the bodies pressed together: probe for it.
 SEPARATION = 1e-6
+#: ... and so may one that arrives slower than this fraction of g T (T the
+#: motion's time scale): bodies chattering at rest against each other.
+SLOW_APPROACH = 1e-6
 #: Deeper than this (m) at any stop, a pair overlaps: the run says so.
 OVERLAP_TOLERANCE = 1e-12
 
@@ -189,7 +196,10 @@ def simulate_path(scene: PathScene, *, t_end: float | None = None, max_collision
     state = np.array([to_float(v, fp_type) for b in range(n) for v in (scene.q[b], scene.dq[b])], dtype=fp_type)
     fired: list[int] = []
     options = {"fp_type": fp_type} if tol is None else {"fp_type": fp_type, "tol": fp_type(tol)}
-    ta = hy.taylor_adaptive(system.equations, state, t_events=system.events(fired), **options)
+    scale = time_scale(scene)
+    # one ulp of the motion's time scale (as on the circle: a cooldown of 0 loses collisions)
+    cooldown = float(np.finfo(fp_type).eps) * scale
+    ta = hy.taylor_adaptive(system.equations, state, t_events=system.events(fired, cooldown), **options)
     # heyoka holds the parameters up to the highest one the equations use
     parameters = np.array(system.initial_parameters(pieces), dtype=fp_type)
     ta.pars[:] = parameters[:len(ta.pars)]
@@ -197,7 +207,6 @@ def simulate_path(scene: PathScene, *, t_end: float | None = None, max_collision
     result.energy_initial = total_energy(scene, state)
     k_law = float(scene.law.restitution)
     k_lim = float(scene.limiter_restitution)
-    scale = time_scale(scene)
     last: dict = {}
     status, message = Status.COMPLETED, f"reached t_end = {t_end:.17g} s"
     warned: set = set()
@@ -230,14 +239,20 @@ def simulate_path(scene: PathScene, *, t_end: float | None = None, max_collision
         ev = system.event_specs[fired[0]]
         t = float(ta.time)
         key = (ev.kind, ev.body)
-        prev = last.get(key, (-np.inf, 0))
-        repeats = prev[1] + 1 if t - prev[0] < ZENO_INTERVAL * scale else 0
-        last[key] = (t, repeats)
-        if repeats >= ZENO_REPEATS:
+        prev_t, prev_dt, repeats = last.get(key, (-np.inf, np.inf, 0))
+        dt = t - prev_t
+        repeats = repeats + 1 if dt < ZENO_INTERVAL * scale else 0
+        last[key] = (t, dt, repeats)
+        # an accumulating sequence: intervals shrinking by rho < 1 end within the
+        # sum of the remaining geometric series, dt rho / (1 - rho)
+        rho = dt / prev_dt if 0 < prev_dt < np.inf else np.inf
+        remaining = dt * rho / (1 - rho) if rho < ZENO_RATIO else np.inf
+        if ev.kind in ("gap", "lower", "upper") and (repeats >= ZENO_REPEATS or remaining < ZENO_REMAINING * scale):
             what = f"bodies {ev.body + 1} and {ev.body + 2}" if ev.kind == "gap" else f"body {ev.body + 1} at a limiter"
             status = Status.CONTACT
-            message = (f"impacts of {what} accumulate at t = {t:.17g} s (persistent contact); "
-                       "contact modes are not modelled on arc-chain and curve tracks yet")
+            message = (f"impacts of {what} accumulate at t = {t + remaining if np.isfinite(remaining) else t:.17g} s "
+                       f"(intervals shrink by {rho:.3g}; the rest of the series lasts {remaining:.3g} s): "
+                       "persistent contact, which is not modelled on arc-chain and curve tracks yet")
             break
         s = ta.state
         if ev.kind == "normal":
@@ -255,7 +270,8 @@ def simulate_path(scene: PathScene, *, t_end: float | None = None, max_collision
                 status, message = Status.INCONSISTENT, msg
                 break
             _off_event_surfaces(system, ta, parameters)
-            if opening <= SEPARATION * abs(closing) and _recloses(scene, ta, ev.body, scale):
+            slow = abs(closing) < SLOW_APPROACH * float(scene.g) * scale
+            if (opening <= SEPARATION * abs(closing) or slow) and _recloses(scene, ta, ev.body, scale):
                 status = Status.CONTACT
                 message = (f"bodies {ev.body + 1} and {ev.body + 2} stay in contact after collision "
                            f"{result.n_collisions} at t = {t:.17g} s (they leave it at a gap rate "
@@ -285,6 +301,13 @@ def simulate_path(scene: PathScene, *, t_end: float | None = None, max_collision
         result.limiter_impacts.append({"t": t, "body": b + 1, "end": ev.kind, "q": float(s[2 * b]),
                                        "v_before": v, "v_after": float(s[2 * b + 1])})
         _off_event_surfaces(system, ta, parameters)
+        if abs(float(s[2 * b + 1])) < SLOW_APPROACH * float(scene.g) * scale and _rests_on_limiter(
+                scene, ta, b, ev.kind, scale):
+            status = Status.CONTACT
+            message = (f"body {b + 1} comes to rest against the {ev.kind} limiter at t = {t:.17g} s "
+                       f"(it rebounds at {abs(float(s[2 * b + 1])):.3g} m/s and is pressed back); resting "
+                       "contact is not modelled on arc-chain and curve tracks yet")
+            break
     overlap = _overlap(scene, ta.state)
     if overlap and status is not Status.OVERLAP:
         # never report success over an overlap
@@ -318,7 +341,17 @@ def _recloses(scene: PathScene, ta, i: int, scale: float) -> bool:
     probe = copy.deepcopy(ta)
     probe.propagate_for(np.asarray(probe.time).dtype.type(1e-4 * scale))
     x = np.asarray(probe.state, dtype=float)
-    return float(scene.gap(i, x[2 * i], x[2 * i + 2])) <= 0.0
+    # not separated by more than the size of a rounding error of the positions
+    return float(scene.gap(i, x[2 * i], x[2 * i + 2])) <= 1e-12
+
+
+def _rests_on_limiter(scene: PathScene, ta, b: int, end: str, scale: float) -> bool:
+    """Is body b, just rebounding slowly from a limiter, pressed back onto it? (probe as in _recloses)"""
+    probe = copy.deepcopy(ta)
+    probe.propagate_for(np.asarray(probe.time).dtype.type(1e-4 * scale))
+    q = float(probe.state[2 * b])
+    lo, hi = scene.domain(b)
+    return (q - lo if end == "lower" else hi - q) <= 1e-12 or float(probe.time) < float(ta.time) + 1e-4 * scale * 0.999
 
 
 def _leaves(scene: PathScene, b: int, t: float, q: float) -> str:

@@ -192,7 +192,9 @@ class PathSystem:
         dx, dy = u.x_c - t.x_c, u.y_c - t.y_c
         return dx * dx + dy * dy - d * d  # squared: smooth, same sign as the gap
 
-    def events(self, fired: list) -> list:
+    def events(self, fired: list, cooldown: float = -1.0) -> list:
+        """Terminal events; ``cooldown`` for the gaps and limiters (heyoka's default,
+        scaled by 1/|g'|, hides the quick re-collisions of an accumulating sequence)."""
         def callback(n):
             def cb(ta, d_sgn):
                 fired.append(n)
@@ -202,7 +204,8 @@ class PathSystem:
         direction = {"lower": hy.event_direction.negative, "upper": hy.event_direction.positive,
                      "gap": hy.event_direction.negative, "normal": hy.event_direction.negative}
         return [hy.t_event(self.event_expression(ev), callback=callback(n), direction=direction[ev.kind],
-                           fp_type=self.fp_type) for n, ev in enumerate(self.event_specs)]
+                           cooldown=self.fp_type(cooldown if ev.kind != "normal" else -1.0), fp_type=self.fp_type)
+                for n, ev in enumerate(self.event_specs)]
 
     @cached_property
     def event_function(self):
