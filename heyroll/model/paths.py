@@ -20,6 +20,7 @@ vertical axis at constant Omega.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import mpmath
 import numpy as np
@@ -216,6 +217,9 @@ class ArcChainTrack:
     def pieces(self, body: Body, exact: bool = False) -> tuple[PathPiece, ...]:
         """The centre path of ``body`` over every segment, s from 0 at the chain start
         (floats; with ``exact`` the same pieces in mpmath numbers at model precision)."""
+        return _pieces(self, body, exact)
+
+    def _build_pieces(self, body: Body, exact: bool) -> tuple[PathPiece, ...]:
         out, s = [], mpmath.mpf(0)
         r = body.radius
         with workprec():
@@ -262,6 +266,12 @@ class ArcChainTrack:
         if seg.kind == "line":
             return mpmath.mpf(1)
         return seg.radius - body.radius if seg.side == "concave" else seg.radius + body.radius
+
+
+@lru_cache(maxsize=256)
+def _pieces(track: ArcChainTrack, body: Body, exact: bool) -> tuple[PathPiece, ...]:
+    # pure function of frozen inputs: the geometry is computed once per (track, body)
+    return track._build_pieces(body, exact)
 
 
 def _arc_centre(seg: Segment, px, py):

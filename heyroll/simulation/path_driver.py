@@ -256,13 +256,13 @@ def simulate_path(scene: PathScene, *, t_end: float | None = None, max_collision
             break
         s = ta.state
         if ev.kind == "normal":
-            left = _leaves(scene, ev.body, t, float(s[2 * ev.body]))
             if scene.track_sides == "one":
-                status, message = Status.LEFT_TRACK, left
+                status, message = Status.LEFT_TRACK, _leaves(scene, ev.body, t, float(s[2 * ev.body]))
                 break
             if ev.body not in warned:
                 warned.add(ev.body)
-                result.warnings.append(left + "; the two-sided track holds it (sides = \"one\" stops here)")
+                result.warnings.append(_leaves(scene, ev.body, t, float(s[2 * ev.body]))
+                                       + "; the two-sided track holds it (sides = \"one\" stops here)")
             continue
         if ev.kind == "gap":
             ok, msg, closing, opening = _collide(scene, ta, ev.body, k_law, result)
