@@ -99,16 +99,7 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene | PathS
         bodies.append(body)
         phis.append(phi)
         dphis.append(dphi)
-    collision = _table(data, "collision", required=False)
-    _no_unknown(collision, COLLISION_KEYS, "collision")
-    law = _law(collision)
-    policy = collision.get("on_inconsistent", "newton")
-    if not isinstance(policy, str):
-        raise SceneError("collision.on_inconsistent", "must be a string: newton | error")
-    run = _table(data, "run", required=False)
-    _no_unknown(run, RUN_KEYS, "run")
-    max_collisions = run.get("max_collisions")
-    settings = RunSettings.make(_number(run, "t_end", "run", default="100"), max_collisions)
+    law, policy, settings = _collision_and_run(data)
     return Scene.make(
         track=track, bodies=bodies, phi=phis, dphi=dphis, law=law, g=g, run=settings, name=name,
         friction=friction, on_inconsistent=policy, track_sides=sides,
@@ -185,13 +176,7 @@ def _path_scene(data: dict, track_table: dict, name: str, g) -> PathScene:
         bodies.append(body)
         qs.append(q)
         dqs.append(dq)
-    collision = _table(data, "collision", required=False)
-    _no_unknown(collision, COLLISION_KEYS, "collision")
-    law = _law(collision)
-    policy = collision.get("on_inconsistent", "newton")
-    run = _table(data, "run", required=False)
-    _no_unknown(run, RUN_KEYS, "run")
-    settings = RunSettings.make(_number(run, "t_end", "run", default="100"), run.get("max_collisions"))
+    law, policy, settings = _collision_and_run(data)
     return PathScene.make(track, bodies, qs, dqs, law=law,
                           limiter_restitution=_number(track_table, "limiter_restitution", "track"),
                           frame=frame, g=g, run=settings, name=name, on_inconsistent=policy,
@@ -205,11 +190,21 @@ def _sides(table: dict) -> str:
     return sides
 
 
-def _law(collision: dict):
+def _collision_and_run(data: dict):
+    """The [collision] and [run] tables, shared by every track type: (law, policy, RunSettings)."""
+    collision = _table(data, "collision", required=False)
+    _no_unknown(collision, COLLISION_KEYS, "collision")
     law_name = collision.get("law", "hedrih")
     if not isinstance(law_name, str):
         raise SceneError("collision.law", "must be a string")
-    return make_law(law_name, _number(collision, "restitution", "collision", default="1"))
+    law = make_law(law_name, _number(collision, "restitution", "collision", default="1"))
+    policy = collision.get("on_inconsistent", "newton")
+    if not isinstance(policy, str):
+        raise SceneError("collision.on_inconsistent", "must be a string: newton | error")
+    run = _table(data, "run", required=False)
+    _no_unknown(run, RUN_KEYS, "run")
+    settings = RunSettings.make(_number(run, "t_end", "run", default="100"), run.get("max_collisions"))
+    return law, policy, settings
 
 
 def _bodies_list(data: dict) -> list:

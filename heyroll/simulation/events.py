@@ -115,6 +115,13 @@ def mode_handlers(
     return handlers, warnings, settle
 
 
+def stop_at_max_collisions(stop: StopRequest, limit: int) -> bool:
+    """Ask the driver to stop after the limit-th collision; False stops heyoka."""
+    stop.reason = "max_collisions"
+    stop.message = f"stopped after max_collisions = {limit} collisions"
+    return False
+
+
 def mode_events(system: SceneSystem, cooldown, slots: list, nt_slots: list) -> tuple[list, list]:
     """heyoka events of one contact mode whose callbacks call ``slots[n]`` / ``nt_slots[n]``.
 
@@ -421,9 +428,7 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         s[vi_index] = vi_new
         s[vj_index] = vj_new
         if limit is not None and log.flushed + len(records) >= limit:
-            stop.reason = "max_collisions"
-            stop.message = f"stopped after max_collisions = {limit} collisions"
-            return False
+            return stop_at_max_collisions(stop, limit)
         return True
 
     def on_collision(ta, d_sgn):
@@ -627,9 +632,7 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
         after = system.expand(s.tolist())
         log.records.append((t, contact.pair_index, before, None, after, flag))
         if log.max_collisions is not None and log.count >= log.max_collisions:
-            stop.reason = "max_collisions"
-            stop.message = f"stopped after max_collisions = {log.max_collisions} collisions"
-            return False
+            return stop_at_max_collisions(stop, log.max_collisions)
         return True
 
     def on_collision(ta, d_sgn):

@@ -338,20 +338,27 @@ def _recloses(scene: PathScene, ta, i: int, scale: float) -> bool:
     bodies are pressed together; heyoka cannot see that crossing (the gap
     starts at 0 and never changes sign within a step).
     """
-    probe = copy.deepcopy(ta)
-    probe.propagate_for(np.asarray(probe.time).dtype.type(1e-4 * scale))
-    x = np.asarray(probe.state, dtype=float)
+    x = _probe(ta, scale)
     # not separated by more than the size of a rounding error of the positions
     return float(scene.gap(i, x[2 * i], x[2 * i + 2])) <= 1e-12
 
 
 def _rests_on_limiter(scene: PathScene, ta, b: int, end: str, scale: float) -> bool:
     """Is body b, just rebounding slowly from a limiter, pressed back onto it? (probe as in _recloses)"""
+    q = float(_probe(ta, scale)[2 * b])
+    lo, hi = scene.domain(b)
+    return (q - lo if end == "lower" else hi - q) <= 1e-12
+
+
+def _probe(ta, scale: float) -> np.ndarray:
+    """The state after integrating a copy of ``ta`` for 1e-4 of the motion's time scale.
+
+    A terminal event may stop the copy earlier; the callers read the positions
+    where it stopped (a re-hit leaves them on the surface: pressed back).
+    """
     probe = copy.deepcopy(ta)
     probe.propagate_for(np.asarray(probe.time).dtype.type(1e-4 * scale))
-    q = float(probe.state[2 * b])
-    lo, hi = scene.domain(b)
-    return (q - lo if end == "lower" else hi - q) <= 1e-12 or float(probe.time) < float(ta.time) + 1e-4 * scale * 0.999
+    return np.asarray(probe.state, dtype=float)
 
 
 def _leaves(scene: PathScene, b: int, t: float, q: float) -> str:
