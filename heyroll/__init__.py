@@ -16,10 +16,9 @@ from ._version import __version__
 from .errors import SceneError, SceneFileError
 from .model.bodies import Body, Shape
 from .model.laws import CollisionLaw, GeneralizedNewtonLaw, HedrihRollingLaw, NewtonCentreLaw, make_law
-from .model.path_scene import PathScene
-from .model.paths import ArcChainTrack, CurveTrack, Frame, Segment
+from .model.frame import Frame
 from .model.scene import RunSettings, Scene
-from .model.tracks import CircleTrack
+from .model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment, ThreeArcTrack, Track
 
 # The simulation and interface layers load heyoka and matplotlib: import them
 # on first use, so that the model layer works (and imports fast) without them.
@@ -29,8 +28,7 @@ _LAZY = {
     "SimulationResult": ("heyroll.simulation.result", "SimulationResult"),
     "Status": ("heyroll.simulation.result", "Status"),
     "TABLE_COLUMNS": ("heyroll.simulation.result", "TABLE_COLUMNS"),
-    "simulate_path": ("heyroll.simulation.path_driver", "simulate_path"),
-    "PathResult": ("heyroll.simulation.path_driver", "PathResult"),
+    "RunOptions": ("heyroll.simulation.driver", "RunOptions"),
     "EquilibriumProblem": ("heyroll.analysis.equilibria", "EquilibriumProblem"),
     "find_equilibria": ("heyroll.analysis.equilibria", "find_equilibria"),
     "bifurcations": ("heyroll.analysis.equilibria", "bifurcations"),
@@ -57,12 +55,12 @@ __all__ = [
     "CurveTrack",
     "EquilibriumProblem",
     "Frame",
-    "PathResult",
-    "PathScene",
+    "RunOptions",
     "Segment",
+    "ThreeArcTrack",
+    "Track",
     "bifurcations",
     "find_equilibria",
-    "simulate_path",
     "CircleTrack",
     "CollisionLaw",
     "GeneralizedNewtonLaw",

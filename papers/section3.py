@@ -107,14 +107,14 @@ def table1_columns():
     columns = {}
     with workprec():
         for name, law in (("translation", NewtonCentreLaw(restitution=k)), ("rolling", HedrihRollingLaw(restitution=k))):
-            v1, v2 = law.variables(track, b1), law.variables(track, b2)
+            v1, v2 = law.variables(b1, track.path_radius(b1)), law.variables(b2, track.path_radius(b2))
             M1, M2 = v1.inertia, v2.inertia
             # the same physical state in both columns: phi' = omega_P / ((R - r)/r)
             u1 = v1.scale * w1 / track.rolling_ratio(b1)
             u2 = v2.scale * w2 / track.rolling_ratio(b2)
             kk = law.restitution
             u1o, u2o = row_outgoing(M1, M2, u1, u2, kk)
-            law_u1o, law_u2o = outgoing(law, track, b1, b2, u1, u2)
+            law_u1o, law_u2o = outgoing(law, b1, b2, u1, u2, track.path_radius(b1), track.path_radius(b2))
             columns[name] = {
                 "inertia": (M1, M2),
                 "incoming": (u1, u2),
@@ -192,8 +192,8 @@ def example_coefficients(r1=Fraction(1, 8), density=7800, R=1):
             b1 = Body.of_shape("solid_sphere", r1, density=density)
             b2 = Body.of_shape("solid_sphere", r1 * ratio, density=density)
             J1, J2 = b1.rolling_inertia(), b2.rolling_inertia()
-            w1o, w2o = outgoing(law, track, b1, b2, mpmath.mpf(1), mpmath.mpf(0))
-            imap = impulse_map(law, track, b1, b2)
+            w1o, w2o = outgoing(law, b1, b2, mpmath.mpf(1), mpmath.mpf(0), track.path_radius(b1), track.path_radius(b2))
+            imap = impulse_map(law, b1, b2, track.path_radius(b1), track.path_radius(b2))
             c1, c2 = track.rolling_ratio(b1), track.rolling_ratio(b2)
             results[label] = {
                 "radius_ratio": ratio,

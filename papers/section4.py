@@ -148,8 +148,8 @@ def fig11(result, path: Path) -> Path:
         ax.annotate(f"$N_{{{k + 1},0}}$", (phi0, dphi0), textcoords="offset points", xytext=(5, 5), fontsize=9)
         for n, row in enumerate(table, start=1):
             side = "i" if row["i"] == k + 1 else "j"
-            phi = row[f"phi_{side}"]
-            before, after = row[f"dphi_{side}_before"], row[f"dphi_{side}_after"]
+            phi = row[f"q_{side}"]
+            before, after = row[f"dq_{side}_before"], row[f"dq_{side}_after"]
             ax.vlines(phi, before, after, colors="k", linestyles="--", lw=1.0)
             ax.plot([phi], [before], "o", color="k", ms=4.5)
             ax.plot([phi], [after], "s", mfc="white", mec="k", ms=5)
@@ -239,9 +239,9 @@ def fig12(result, path: Path) -> Path:
         i, j = int(row["i"]) - 1, int(row["j"]) - 1
         ph = [0.0, 0.0]
         before, after = [0.0, 0.0], [0.0, 0.0]
-        ph[i], ph[j] = float(row["phi_i"]), float(row["phi_j"])
-        before[i], before[j] = float(row["dphi_i_before"]), float(row["dphi_j_before"])
-        after[i], after[j] = float(row["dphi_i_after"]), float(row["dphi_j_after"])
+        ph[i], ph[j] = float(row["q_i"]), float(row["q_j"])
+        before[i], before[j] = float(row["dq_i_before"]), float(row["dq_j_before"])
+        after[i], after[j] = float(row["dq_i_after"]), float(row["dq_j_after"])
         _configuration(
             axes[n], sc, ph, before, after,
             f"collision {n}, t = {float(row['t']):.6f} s\n"
@@ -280,12 +280,12 @@ def main(argv=None) -> int:
     ref = reference_collisions(sc, COLLISIONS_SHOWN, dps=30)
     table = result.collision_table()
     cmp = compare_with_engine(table[:COLLISIONS_SHOWN], ref)
-    print(f"{'n':>2} {'i,j':>4} {'t (s)':>20} {'phi_i':>12} {'phi_j':>12} {'phi_i dot in/out':>24} {'phi_j dot in/out':>24} {'t rel. err vs exact':>20}")
+    print(f"{'n':>2} {'i,j':>4} {'t (s)':>20} {'q_i':>12} {'q_j':>12} {'phi_i dot in/out':>24} {'phi_j dot in/out':>24} {'t rel. err vs exact':>20}")
     for n in range(COLLISIONS_SHOWN):
         row = table[n]
-        d1 = f"{row['dphi_i_before']:+.5f}/{row['dphi_i_after']:+.5f}"
-        d2 = f"{row['dphi_j_before']:+.5f}/{row['dphi_j_after']:+.5f}"
-        print(f"{n + 1:>2} {str(row['i']) + ',' + str(row['j']):>4} {row['t']:>20.15f} {row['phi_i']:>12.8f} {row['phi_j']:>12.8f} {d1:>24} {d2:>24} {cmp['t_rel'][n]:>20.2e}")
+        d1 = f"{row['dq_i_before']:+.5f}/{row['dq_i_after']:+.5f}"
+        d2 = f"{row['dq_j_before']:+.5f}/{row['dq_j_after']:+.5f}"
+        print(f"{n + 1:>2} {str(row['i']) + ',' + str(row['j']):>4} {row['t']:>20.15f} {row['q_i']:>12.8f} {row['q_j']:>12.8f} {d1:>24} {d2:>24} {cmp['t_rel'][n]:>20.2e}")
     ok = bool(np.all(cmp["same_pair"]) and np.all(cmp["t_rel"] < 1e-13))
 
     from heyroll.analysis.series_error import paper_method_first_collision

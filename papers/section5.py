@@ -32,10 +32,11 @@ from pathlib import Path
 import numpy as np
 
 from heyroll.analysis.equilibria import EquilibriumProblem, bifurcations, find_equilibria
-from heyroll.interfaces.path_figures import bifurcation_figure, energy_surface_figure, portrait_figure
+from heyroll.interfaces.portrait_figures import bifurcation_figure, energy_surface_figure, portrait_figure
 from heyroll.model.bodies import Body
-from heyroll.model.path_scene import PathScene
-from heyroll.model.paths import ArcChainTrack, CurveTrack, Frame
+from heyroll.model.scene import Scene
+from heyroll.model.frame import Frame
+from heyroll.model.tracks import ArcChainTrack, CurveTrack, ThreeArcTrack
 from heyroll.model.scene import RunSettings
 
 DISK = dict(shape="disk", radius="0.1", mass="1")
@@ -63,15 +64,15 @@ def body(spec) -> Body:
 
 def arcs_scene(name: str) -> PathScene:
     p = PARAMETERS[name]
-    track = ArcChainTrack.three_arcs(p["R"], p["R0"], p["beta"])
-    return PathScene.make(track, [body(p["body"])], [p["s"]], [0], limiter_restitution=1, name=(
+    track = ThreeArcTrack.make(p["R"], p["R0"], p["beta"])
+    return Scene.make(track, [body(p["body"])], [p["s"]], [0], limiter_restitution=1, name=(
         f"{name}: three arcs R = {p['R']} m, R0 = {p['R0']} m, beta = {p['beta']}, disk r = {p['body']['radius']} m"))
 
 
 def curve_scene() -> PathScene:
     p = PARAMETERS["fig19"]
     track = CurveTrack.make(p["y"], p["x_min"], p["x_max"])
-    return PathScene.make(track, [body(p["body"])], [p["x"]], [0], frame=Frame.make(p["omega"], p["axis_x"]),
+    return Scene.make(track, [body(p["body"])], [p["x"]], [0], frame=Frame.make(p["omega"], p["axis_x"]),
                           run=RunSettings.make(10), name=f"fig19: y = {p['y']}, Omega = {p['omega']} rad/s, disk r = 0.05 m")
 
 
@@ -112,7 +113,7 @@ def main(argv=None) -> int:
     disk = body(PARAMETERS["fig19"]["body"])
     for k, (label, (y, lo, hi)) in enumerate(PAPER_CURVES.items(), start=1):
         track = CurveTrack.make(y, lo, hi)
-        sc = PathScene.make(track, [disk], [0.0], [0], frame=Frame.make(0, 0), name=f"curve {k}: {label}")
+        sc = Scene.make(track, [disk], [0.0], [0], frame=Frame.make(0, 0), name=f"curve {k}: {label}")
         bifurcation_figure(sc, args.out / f"bifurcation_curve{k}.png", OMEGAS)
         problem = EquilibriumProblem(track, disk, Frame.make(0, 0))
         eq0 = find_equilibria(problem)

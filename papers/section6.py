@@ -23,10 +23,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from heyroll.interfaces.path_figures import body_energy_figure, branches_figure
+from heyroll.interfaces.portrait_figures import body_energy_figure, branches_figure
 from heyroll.interfaces.scene_file import load_scene
 from heyroll.model.laws import kinetic_energy_change
-from heyroll.simulation.path_driver import simulate_path
+from heyroll.simulation.driver import simulate
 
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "two_disks_rotating_arcs.toml"
 
@@ -41,21 +41,21 @@ def main(argv=None) -> int:
     for n, b in enumerate(scene.bodies, start=1):
         print(f"disk {n}: r = {float(b.radius)} m, m = {float(b.mass)} kg, lambda = g/((R - r) Omega^2) = "
               f"{g / ((1.0 - float(b.radius)) * omega**2):.6f}")
-    result = simulate_path(scene, keep_branches=True)
+    result = simulate(scene, dense=True)
     print(f"{result.status.value}: {result.message}; {result.n_collisions} collisions, "
-          f"{len(result.junctions)} junction crossings, {result.inconsistent} rolling-law outcomes left the disks "
+          f"{len(result.junctions)} junction crossings, {result.settings['inconsistent_collisions']} rolling-law outcomes left the disks "
           f"approaching (resolved by Newton's law on the gap rate)")
     k = float(scene.law.restitution)
     worst = 0.0
     print(f"{'n':>3} {'t (s)':>19} {'H1 before':>12} {'H1 after':>12} {'H2 before':>12} {'H2 after':>12} "
           f"{'dH':>12} {'eq. (15)':>12} law")
-    from heyroll.simulation.path_driver import body_energy
+    from heyroll.interfaces.portrait_figures import body_energy
 
-    for c in result.collisions:
-        h1b = float(body_energy(scene, 0, c["q_i"], c["v_i_before"]))
-        h1a = float(body_energy(scene, 0, c["q_i"], c["v_i_after"]))
-        h2b = float(body_energy(scene, 1, c["q_j"], c["v_j_before"]))
-        h2a = float(body_energy(scene, 1, c["q_j"], c["v_j_after"]))
+    for c in result.collision_table():
+        h1b = float(body_energy(scene, 0, c["q_i"], c["dq_i_before"]))
+        h1a = float(body_energy(scene, 0, c["q_i"], c["dq_i_after"]))
+        h2b = float(body_energy(scene, 1, c["q_j"], c["dq_j_before"]))
+        h2a = float(body_energy(scene, 1, c["q_j"], c["dq_j_after"]))
         dH = c["energy_after"] - c["energy_before"]
         J1, J2 = (float(b.rolling_inertia()) for b in scene.bodies)
         predicted = kinetic_energy_change(J1, J2, k, c["omega_i_before"] - c["omega_j_before"])

@@ -14,7 +14,7 @@ from heyroll.interfaces.cli import main
 from conftest import EXAMPLE, body, scene_text
 
 REQUIRED_COLUMNS = (
-    "n,t,i,j,phi_i,phi_j,omega_i_before,omega_j_before,omega_i_after,omega_j_after,energy_before,energy_after"
+    "n,t,i,j,q_i,q_j,omega_i_before,omega_j_before,omega_i_after,omega_j_after,energy_before,energy_after"
 ).split(",")
 SUMMARY_KEYS = {"status", "message", "collisions", "t_final", "energy_initial", "energy_final", "final_state", "wall_time_s", "versions"}
 
@@ -35,7 +35,7 @@ def test_run_default_scene_writes_every_output(tmp_path, capsys):
     assert SUMMARY_KEYS <= set(summary)
     assert summary["status"] == "max_collisions" and summary["collisions"] == 6
     assert {"heyroll", "heyoka", "numpy"} <= set(summary["versions"])
-    assert len(summary["final_state"]) == 2 and {"phi", "dphi"} <= set(summary["final_state"][0])
+    assert len(summary["final_state"]) == 2 and {"q", "dq"} <= set(summary["final_state"][0])
     for png in ("phase_portrait.png", "energy.png"):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "max_collisions" in capsys.readouterr().out
@@ -47,7 +47,7 @@ def test_csv_floats_round_trip_exactly(tmp_path):
     rows = read_csv(out / "collisions.csv")
     table = heyroll.simulate(heyroll.load_scene(EXAMPLE)).collision_table()
     assert len(rows) == table.size == 20  # [run] max_collisions = 20
-    for name in ("t", "phi_i", "omega_j_after", "energy_before"):
+    for name in ("t", "q_i", "omega_j_after", "energy_before"):
         assert np.array_equal(np.array([float(r[name]) for r in rows]), table[name])
     assert all(len(r["t"].replace(".", "").replace("-", "").split("e")[0].lstrip("0")) <= 17 for r in rows)
 

@@ -66,8 +66,8 @@ def test_collisions_are_located_on_the_gap_root_and_never_overlap():
     assert np.max(np.abs(at_collision)) < 8 * EPS
     # Approach before, separation after, at every collision.
     table = result.collision_table()
-    assert np.all(table["dphi_i_before"] > table["dphi_j_before"])
-    assert np.all(table["dphi_i_after"] < table["dphi_j_after"])
+    assert np.all(table["dq_i_before"] > table["dq_j_before"])
+    assert np.all(table["dq_i_after"] < table["dq_j_after"])
     from heyroll.simulation.trajectory import sample_branches
 
     samples = np.concatenate([b.states for b in sample_branches(result, points=400)])
@@ -97,7 +97,7 @@ def test_equal_radii_rolling_law_is_newton_with_generalized_masses():
     a = heyroll.simulate(two_balls(r1="0.12", r2="0.12", k="0.9"), max_collisions=10).collision_table()
     b = heyroll.simulate(two_balls(r1="0.12", r2="0.12", k="0.9", law="newton_generalized"), max_collisions=10).collision_table()
     assert np.allclose(a["t"], b["t"], rtol=1e-14, atol=0)
-    assert np.allclose(a["dphi_i_after"], b["dphi_i_after"], rtol=1e-12)
+    assert np.allclose(a["dq_i_after"], b["dq_i_after"], rtol=1e-12)
 
 
 def test_newton_law_runs_on_centre_speeds():
@@ -105,8 +105,8 @@ def test_newton_law_runs_on_centre_speeds():
     table = heyroll.simulate(scene, max_collisions=5).collision_table()
     m = np.array([float(b.mass) for b in scene.bodies])
     rho = np.array([float(scene.track.path_radius(b)) for b in scene.bodies])
-    p_before = m[0] * rho[0] * table["dphi_i_before"] + m[1] * rho[1] * table["dphi_j_before"]
-    p_after = m[0] * rho[0] * table["dphi_i_after"] + m[1] * rho[1] * table["dphi_j_after"]
+    p_before = m[0] * rho[0] * table["dq_i_before"] + m[1] * rho[1] * table["dq_j_before"]
+    p_after = m[0] * rho[0] * table["dq_i_after"] + m[1] * rho[1] * table["dq_j_after"]
     assert np.allclose(p_before, p_after, rtol=1e-13, atol=1e-13 * np.abs(p_before).max())
 
 
@@ -119,7 +119,7 @@ def test_body_over_the_top_hits_its_neighbour_from_behind():
     assert table.size >= 1
     first = table[0]
     assert (first["i"], first["j"]) == (2, 1)
-    assert first["phi_j"] + 2 * math.pi - first["phi_i"] == pytest.approx(float(scene.pairs[1].beta), abs=1e-13)
+    assert first["q_j"] + 2 * math.pi - first["q_i"] == pytest.approx(float(scene.pairs[1].beta), abs=1e-13)
 
 
 def test_contacts_the_energy_cannot_reach_are_not_compiled():
@@ -182,7 +182,7 @@ def test_rolling_law_outcome_that_keeps_bodies_approaching():
     table = result.collision_table()
     flagged = table[table["law_flag"] == 1]
     assert result.success and flagged.size == result.settings["inconsistent_collisions"] > 0
-    assert np.all(flagged["dphi_i_after"] < flagged["dphi_j_after"])  # the fallback separates them
+    assert np.all(flagged["dq_i_after"] < flagged["dq_j_after"])  # the fallback separates them
     strict = parse_scene(
         scene_text(
             body(radius="0.10", mass=None, phi="-1.0", extra="density = 7850.0")

@@ -588,7 +588,7 @@ def test_eq70_71_80_81_restart_rate():
         c1, c2 = track.rolling_ratio(b1), track.rolling_ratio(b2)
         beta = track.contact_angle(b1, b2)
         phi_c, dphi1_in, dphi2_in = mp("-0.3"), mp("1.5"), mp("-0.4")
-        w1o, w2o = outgoing(law, track, b1, b2, c1 * dphi1_in, c2 * dphi2_in)
+        w1o, w2o = outgoing(law, b1, b2, c1 * dphi1_in, c2 * dphi2_in, track.path_radius(b1), track.path_radius(b2))
         dphi1_out, dphi2_out = w1o / c1, w2o / c2
         gm1, wm1 = track.generalized_mass(b1), track.weight_moment(b1, G)
         gm2, wm2 = track.generalized_mass(b2), track.weight_moment(b2, G)
@@ -673,16 +673,16 @@ def test_remark_hedrih_may_not_separate():
         small = Body.of_shape("solid_sphere", "0.05", density=7800)
         p1, p2 = mp(1), mp(0)  # big ball (behind) hits the small one at rest
         for k in (0, 1):
-            m = impulse_map(HedrihRollingLaw(restitution=k), track, big, small)
+            m = impulse_map(HedrihRollingLaw(restitution=k), big, small, track.path_radius(big), track.path_radius(small))
             D = p1 - m.q * p2
             p1o, p2o = p1 - m.a_i * D, p2 + m.a_j * D
             assert p2o - p1o < 0  # still approaching: the bodies would interpenetrate
-            g = impulse_map(GeneralizedNewtonLaw(restitution=k), track, big, small)
+            g = impulse_map(GeneralizedNewtonLaw(restitution=k), big, small, track.path_radius(big), track.path_radius(small))
             D = p1 - g.q * p2
             assert rel_close((p2 + g.a_j * D) - (p1 - g.a_i * D), k * (p1 - p2))
         # equal rolling rates, unequal radii: approaching in position, but no impulse at all
         c_big, c_small = track.rolling_ratio(big), track.rolling_ratio(small)
         w = mp(2)
         assert w / c_big - w / c_small > 0  # the gap closes
-        o1, o2 = outgoing(HedrihRollingLaw(restitution=1), track, big, small, w, w)
+        o1, o2 = outgoing(HedrihRollingLaw(restitution=1), big, small, w, w, track.path_radius(big), track.path_radius(small))
         assert o1 == w and o2 == w

@@ -16,10 +16,11 @@ import pytest
 from heyroll.analysis.equilibria import EquilibriumProblem, find_equilibria
 from heyroll.errors import SceneError
 from heyroll.model.bodies import Body
-from heyroll.model.path_scene import PathScene
-from heyroll.model.paths import ArcChainTrack, CurveTrack, Frame, Segment
+from heyroll.model.scene import Scene
+from heyroll.model.frame import Frame
+from heyroll.model.tracks import ArcChainTrack, CurveTrack, Segment, ThreeArcTrack
 from heyroll.model.scene import RunSettings
-from heyroll.simulation.path_driver import simulate_path
+from heyroll.simulation.driver import simulate
 
 G = 9.81
 R, R0, BETA = 1.0, 0.5, 0.2
@@ -27,16 +28,16 @@ R, R0, BETA = 1.0, 0.5, 0.2
 
 def hump_state(omega="0", v0="-0.4", t_end="0.2"):
     """A disk on the convex arc of the three-arc track: (psi0, psi0', psi, psi') after t_end."""
-    track = ArcChainTrack.three_arcs(R, R0, BETA)
+    track = ThreeArcTrack.make(R, R0, BETA)
     disk = Body.of_shape("disk", "0.05", mass=1)
     piece = track.pieces(disk)[1]
     rho = R0 + 0.05
     psi0 = 0.3  # psi from the top, clockwise (s grows with psi)
     s0 = piece.s0 + rho * (psi0 + (math.pi / 2 - BETA))
-    scene = PathScene.make(track, [disk], [s0], [v0], frame=Frame.make(omega, 0), run=RunSettings.make(t_end))
-    result = simulate_path(scene)
+    scene = Scene.make(track, [disk], [s0], [v0], frame=Frame.make(omega, 0), run=RunSettings.make(t_end))
+    result = simulate(scene)
     assert result.junctions == [] and result.limiter_impacts == []
-    s, v = float(result.state[0]), float(result.state[1])
+    s, v = float(result.final_state[0]), float(result.final_state[1])
     psi = (s - piece.s0) / rho - (math.pi / 2 - BETA)
     return psi0, float(v0) / rho, psi, v / rho, disk
 
@@ -88,8 +89,8 @@ def test_G3_characteristic_equation_has_no_factor_2kappa_over_3(shape, kappa):
     printed = paper_characteristic_roots(track, 0.05, kappa, 3.0)
 
     def drift(x0):  # a body released at rest at x0: how far it moves in 0.3 s
-        scene = PathScene.make(track, [body], [x0], [0], frame=frame, run=RunSettings.make("0.3"))
-        return abs(float(simulate_path(scene).state[0]) - x0)
+        scene = Scene.make(track, [body], [x0], [0], frame=frame, run=RunSettings.make("0.3"))
+        return abs(float(simulate(scene).final_state[0]) - x0)
 
     outer = max(ours)  # the outer centre, where the centrifugal term matters most
     assert drift(outer) < 1e-12
@@ -105,9 +106,9 @@ def test_G4_first_integral_eq92_has_the_square_root_over_everything():
     disk = Body.of_shape("disk", "0.05", mass=1)
     r, kappa, omega = 0.05, 1.5, 3.0
     x0, v0 = 1.3, 0.4
-    scene = PathScene.make(track, [disk], [x0], [v0], frame=Frame.make(omega, 0), run=RunSettings.make("0.3"))
-    res = simulate_path(scene)
-    x, v = float(res.state[0]), float(res.state[1])
+    scene = Scene.make(track, [disk], [x0], [v0], frame=Frame.make(omega, 0), run=RunSettings.make("0.3"))
+    res = simulate(scene)
+    x, v = float(res.final_state[0]), float(res.final_state[1])
     F = lambda q: float(track.metric(q, r))  # noqa: E731
     xc = lambda q: float(track.centre(q, r)[0])  # noqa: E731
     yc = lambda q: float(track.centre(q, r)[1])  # noqa: E731

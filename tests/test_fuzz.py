@@ -56,7 +56,7 @@ from hypothesis import HealthCheck, assume, event, given, seed, settings
 from hypothesis import strategies as st
 
 import heyroll
-from heyroll import Body, CircleTrack, PathScene, RunSettings, Scene, SceneError, Status, make_law, parse_scene
+from heyroll import Body, CircleTrack, RunSettings, Scene, SceneError, Status, make_law, parse_scene
 from heyroll.interfaces.cli import main as cli_main
 from heyroll.model.laws import conserves_mechanical_energy_bound
 from heyroll.simulation.trajectory import sample_branches
@@ -182,7 +182,7 @@ def check_scene(sc: Scene, precision: str = "double") -> None:
     # (Newton's law on centre speeds with unequal kappa can, by design; the
     # fallback and cluster laws, flags 1 and 2, cannot), nor over the run.
     table = result.collision_table()
-    bounded = np.array([conserves_mechanical_energy_bound(sc.law, sc.track, sc.bodies[p.i], sc.bodies[p.j])
+    bounded = np.array([conserves_mechanical_energy_bound(sc.law, sc.bodies[p.i], sc.bodies[p.j], sc.sigma(p.i), sc.sigma(p.j))
                         for p in sc.pairs])
     scale = float(sum(sc.track.weight_moment(b, sc.g) for b in sc.bodies)) + abs(result.energy_initial)
     if table.size:
@@ -307,7 +307,7 @@ def _load(text: str, record: bool = True):
             assert str(exc).startswith(exc.field + ": ") and "\n" not in str(exc)
         return exc
     note("loaded")
-    assert isinstance(scene, (Scene, PathScene))
+    assert isinstance(scene, Scene)
     return scene
 
 

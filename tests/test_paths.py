@@ -17,12 +17,15 @@ from heyroll.interfaces.cli import main
 from heyroll.interfaces.scene_file import default_scene, default_scene_text, parse_scene
 from heyroll.model import expression as ex
 from heyroll.model.bodies import Body
-from heyroll.model.path_scene import PathScene
-from heyroll.model.paths import MPMATH, ArcChainTrack, CurveTrack, Frame, Segment
+from heyroll.model.scene import Scene
+from heyroll.model.frame import Frame
+from heyroll.model.tracks import ArcChainTrack, CurveTrack, Segment, ThreeArcTrack
+from heyroll.model.tracks.curve import MPMATH
 from heyroll.model.scene import RunSettings, Scene
 from heyroll.model.tracks import CircleTrack
 from heyroll.reference.equilibria import equilibrium_roots
-from heyroll.simulation.path_driver import body_energy, simulate_path, total_energy
+from heyroll.interfaces.portrait_figures import body_energy
+from heyroll.simulation.driver import simulate
 
 README_CURVE = """
 [track]
@@ -90,7 +93,7 @@ def test_expression_text_round_trips():
 def test_curve_rejects_a_body_larger_than_a_hollow():
     # y = 5 x^2: radius of curvature 1/10 m at the bottom
     with pytest.raises(SceneError, match=r"bodies\[1\]\.radius.*radius of curvature falls to 0\.1"):
-        PathScene.make(CurveTrack.make("5*x**2", -1, 1), [Body.of_shape("disk", "0.2", mass=1)], [0.5], [0])
+        Scene.make(CurveTrack.make("5*x**2", -1, 1), [Body.of_shape("disk", "0.2", mass=1)], [0.5], [0])
 
 
 def test_curve_that_is_not_finite_on_its_range_is_rejected():
@@ -106,14 +109,14 @@ def test_arc_chain_rejects_tangents_that_do_not_match():
 
 
 def test_arc_chain_rejects_a_body_larger_than_a_concave_arc():
-    track = ArcChainTrack.three_arcs("0.1", "0.5", "0.2")
+    track = ThreeArcTrack.make("0.1", "0.5", "0.2")
     with pytest.raises(SceneError, match=r"bodies\[1\]\.radius: must be < the radius of concave segment 1"):
-        PathScene.make(track, [Body.of_shape("disk", "0.1", mass=1)], [0.05], [0])
+        Scene.make(track, [Body.of_shape("disk", "0.1", mass=1)], [0.05], [0])
 
 
 def test_three_arcs_geometry_is_continuous_and_has_the_paper_central_angles():
     R, R0, beta = mpmath.mpf(1), mpmath.mpf("0.5"), mpmath.mpf("0.2")
-    track = ArcChainTrack.three_arcs(R, R0, beta)
+    track = ThreeArcTrack.make(R, R0, beta)
     spans = [s.end - s.start for s in track.segments]
     assert [float(x) for x in spans] == pytest.approx(
         [float(3 * mpmath.pi / 2 - beta), float(mpmath.pi - 2 * beta), float(3 * mpmath.pi / 2 - beta)], rel=1e-15)
@@ -131,10 +134,19 @@ def test_stationary_circle_scene_is_unchanged_by_an_empty_frame():
     assert isinstance(scene, Scene) and scene == default_scene()
 
 
-def test_rotating_circle_is_refused_with_a_pointer_to_arcs():
-    text = default_scene_text() + "\n[frame]\nomega = 1\n"
-    with pytest.raises(SceneError, match="frame.omega: a rotating plane needs track type curve"):
-        parse_scene(text)
+def test_rotating_circle_runs_like_one_concave_arc():
+    """A circle in a turning plane (the Lagrangian default) and the same circle as one arc agree."""
+    text = default_scene_text().replace("max_collisions = ", "max_collisions = 0 #") + "\n[frame]\nomega = 2\naxis_x = 0.1\n"
+    circle = parse_scene(text)
+    R = circle.track.radius
+    chain = ArcChainTrack.make([Segment("arc", R, "concave", -mpmath.pi, mpmath.pi)], start_x=0, start_y=-R)
+    s = [(R - b.radius) * (p + mpmath.pi) for b, p in zip(circle.bodies, circle.q)]
+    v = [(R - b.radius) * d for b, d in zip(circle.bodies, circle.dq)]
+    arcs = Scene.make(chain, circle.bodies, s, v, frame=circle.frame, law=circle.law)
+    a = heyroll.simulate(circle, t_end=3.0, max_collisions=None)
+    b = heyroll.simulate(arcs, t_end=3.0, max_collisions=None)
+    assert a.n_collisions == b.n_collisions >= 2
+    assert np.max(np.abs(np.asarray(a.times, float) - np.asarray(b.times, float))) < 1e-12
 
 
 # ------------------------------------------------------- events, analytic cases
@@ -150,8 +162,8 @@ def incline_chain(theta: float, length: float):
 def test_junction_crossing_is_located_to_machine_precision():
     theta, L, s0 = 0.3, 2.0, 0.5
     ball = Body.of_shape("solid_sphere", "0.1", mass=1)
-    scene = PathScene.make(incline_chain(theta, L), [ball], [s0], [0], run=RunSettings.make(3))
-    result = simulate_path(scene)
+    scene = Scene.make(incline_chain(theta, L), [ball], [s0], [0], run=RunSettings.make(3))
+    result = simulate(scene)
     t_junction = result.junctions[0]["t"]
     with mpmath.workdps(40):
         acc = mpmath.mpf("9.81") * mpmath.sin(mpmath.mpf(theta)) / mpmath.mpf(7) * 5
@@ -164,9 +176,9 @@ def test_limiter_impact_is_located_to_machine_precision_and_reverses_with_k():
     ball = Body.of_shape("solid_sphere", "0.1", mass=1)
     # start moving up the line towards the limiter at s = 0 with v0
     v0 = -3.0
-    scene = PathScene.make(incline_chain(theta, 2.0), [ball], [s0], [v0], limiter_restitution="0.5",
+    scene = Scene.make(incline_chain(theta, 2.0), [ball], [s0], [v0], limiter_restitution="0.5",
                            run=RunSettings.make("1"))
-    result = simulate_path(scene)
+    result = simulate(scene)
     hit = result.limiter_impacts[0]
     with mpmath.workdps(40):
         acc = mpmath.mpf("9.81") * mpmath.sin(mpmath.mpf(theta)) * 5 / 7  # ds/dt grows at acc
@@ -181,12 +193,12 @@ def test_a_body_turning_back_just_after_a_junction_is_not_lost():
     # measured before the fix: heyoka never fires an event whose function is
     # exactly 0.0 at the start of a step; the body crossed back unseen and the
     # first integral jumped by 8 J
-    track = ArcChainTrack.three_arcs(1, "0.5", "0.2")
+    track = ThreeArcTrack.make(1, "0.5", "0.2")
     ball = Body.of_shape("solid_sphere", "0.08", mass=2)
     hi = track.pieces(ball)[1].s1
     for v in (-0.01, -0.3):
-        scene = PathScene.make(track, [ball], [hi + 1e-9], [v], run=RunSettings.make(1))
-        result = simulate_path(scene)
+        scene = Scene.make(track, [ball], [hi + 1e-9], [v], run=RunSettings.make(1))
+        result = simulate(scene)
         assert [(j["from"], j["to"]) for j in result.junctions] == [(3, 2), (2, 3)]
         assert abs(result.energy_final - result.energy_initial) <= 1e-14 * abs(result.energy_initial)
 
@@ -194,18 +206,18 @@ def test_a_body_turning_back_just_after_a_junction_is_not_lost():
 # ---------------------------------------------------------- first integral
 
 def first_integral_drift(scene, t_end, precision="long"):
-    result = simulate_path(scene, t_end=t_end, precision=precision)
+    result = simulate(scene, t_end=t_end, precision=precision)
     scale = max(abs(result.energy_initial), float(scene.bodies[0].mass * scene.g))
     return result, abs(result.energy_final - result.energy_initial) / scale
 
 
 def rotating_curve_scene(x0="1.3"):
     scene = parse_scene(README_CURVE)
-    return PathScene.make(scene.track, scene.bodies, [x0], [0], frame=scene.frame)
+    return Scene.make(scene.track, scene.bodies, [x0], [0], frame=scene.frame)
 
 
 def rotating_chain_scene():
-    return PathScene.make(ArcChainTrack.three_arcs(1, "0.5", "0.2"), [DISK], ["0.6"], [0],
+    return Scene.make(ThreeArcTrack.make(1, "0.5", "0.2"), [DISK], ["0.6"], [0],
                           frame=Frame.make("1.5", "0.1"))
 
 
@@ -297,7 +309,7 @@ def test_pitchfork_at_the_central_minimum_and_none_at_the_maxima():
 
 def test_pitchfork_in_a_bowl_under_its_own_axis_is_at_lambda_one():
     # an axis through the centre of the left bowl: lambda = g / ((R - r) Omega^2) = 1
-    track = ArcChainTrack.three_arcs(1, "0.5", 0)
+    track = ThreeArcTrack.make(1, "0.5", 0)
     problem = EquilibriumProblem(track, DISK, Frame.make(0, "-1.5"))
     found = bifurcations(problem, np.linspace(3.0, 3.5, 6), samples=20001, refine=30)
     bowl = [b for b in found if abs(b.x + 1.5) < 0.01]
@@ -317,9 +329,9 @@ def test_single_concave_arc_reproduces_the_circle_engine():
     ref = heyroll.simulate(circle)
     chain = ArcChainTrack.make([Segment("arc", R, "concave", -mpmath.pi, mpmath.pi)])
     s = [(R - b.radius) * (p + mpmath.pi) for b, p in zip((b1, b2), phi)]
-    path = PathScene.make(chain, [b1, b2], s, [0, 0], run=RunSettings.make(10))
-    result = simulate_path(path)
-    times = np.array([c["t"] for c in result.collisions])
+    path = Scene.make(chain, [b1, b2], s, [0, 0], run=RunSettings.make(10))
+    result = simulate(path)
+    times = np.asarray(result.times, dtype=float)
     assert len(times) == ref.n_collisions > 5
     assert np.max(np.abs(times - np.asarray(ref.times, dtype=float))) < 1e-12
 
@@ -358,23 +370,23 @@ t_end = {t_end}
 
 def test_two_bodies_on_a_rotating_arc_track_elastic():
     scene = two_disks_on_rotating_arcs()
-    result = simulate_path(scene, keep_branches=True)
+    result = simulate(scene, dense=True)
     assert result.status.value == "completed" and result.n_collisions >= 3
     assert abs(result.energy_final - result.energy_initial) <= 1e-12 * abs(result.energy_initial)
     t, X = result.sample(20000)
-    gaps = scene.gap(0, X[:, 0].astype(float), X[:, 2].astype(float))
+    gaps = scene.gap(0, 1, X[:, 0], X[:, 1])
     assert gaps.min() > -1e-12
     # energy moves between the bodies at the collisions
-    jumps = [abs(body_energy(scene, 0, c["q_i"], c["v_i_after"]) - body_energy(scene, 0, c["q_i"], c["v_i_before"]))
-             for c in result.collisions]
+    jumps = [abs(body_energy(scene, 0, c["q_i"], c["dq_i_after"]) - body_energy(scene, 0, c["q_i"], c["dq_i_before"]))
+             for c in result.collision_table()]
     assert max(jumps) > 1e-3
 
 
 def test_two_bodies_on_a_rotating_arc_track_inelastic_lose_energy_at_each_collision():
     scene = two_disks_on_rotating_arcs(k="0.7", t_end="10")
-    result = simulate_path(scene)
+    result = simulate(scene)
     assert result.n_collisions >= 2
-    for c in result.collisions:
+    for c in result.collision_table():
         assert c["energy_after"] < c["energy_before"]
 
 
@@ -429,9 +441,10 @@ def test_cli_equilibria_refuses_a_circle(capsys, tmp_path):
 
 def test_total_energy_is_the_sum_of_body_energies():
     scene = two_disks_on_rotating_arcs()
-    state = [float(scene.q[0]), 0.3, float(scene.q[1]), -0.2]
-    assert total_energy(scene, state) == pytest.approx(
-        float(body_energy(scene, 0, state[0], state[1]) + body_energy(scene, 1, state[2], state[3])), rel=1e-15)
+    result = simulate(scene, t_end=0.5)
+    state = np.asarray(result.final_state, dtype=float)
+    assert result.energy_final == pytest.approx(
+        float(body_energy(scene, 0, state[0], state[2]) + body_energy(scene, 1, state[1], state[3])), rel=1e-15)
 
 
 ARC_CHAIN = (Path(__file__).resolve().parents[1] / "examples" / "arc_chain.toml").read_text()
@@ -457,7 +470,7 @@ def test_bad_arc_chain_scenes_name_the_field(edit, field):
 
 def test_example_arc_chain_runs_and_keeps_its_first_integral():
     scene = parse_scene(ARC_CHAIN)
-    result = simulate_path(scene)
+    result = simulate(scene)
     assert len(result.junctions) > 5 and result.status.value == "completed"
     assert abs(result.energy_final - result.energy_initial) <= 1e-14 * abs(result.energy_initial)
 
@@ -467,40 +480,40 @@ def test_body_leaves_a_one_sided_hump_where_the_normal_force_vanishes(shape, kap
     """From the top of a convex arc with speed v0 the centre leaves its circle of radius rho at
     cos(psi) = (kappa v0^2/(g rho) + 2)/(kappa + 2) (energy: kappa v^2 = kappa v0^2 + 2 g rho (1 - cos psi),
     and N = 0 when v^2 = g rho cos psi)."""
-    track = ArcChainTrack.three_arcs(1, "0.5", "0.2")
+    track = ThreeArcTrack.make(1, "0.5", "0.2")
     body = Body.of_shape(shape, "0.05", mass=1)
     piece = track.pieces(body)[1]
     rho, v0 = 0.55, 0.3
     top = piece.s0 + rho * (math.pi / 2 - 0.2)
-    one = PathScene.make(track, [body], [top], [v0], track_sides="one", run=RunSettings.make(5))
-    result = simulate_path(one)
+    one = Scene.make(track, [body], [top], [v0], track_sides="one", run=RunSettings.make(5))
+    result = simulate(one)
     assert result.status.value == "left_track" and "body 1 would leave the track" in result.message
-    psi = (float(result.state[0]) - top) / rho
+    psi = (float(result.final_state[0]) - top) / rho
     with mpmath.workdps(30):
         exact = mpmath.acos((kappa * mpmath.mpf(v0) ** 2 / (mpmath.mpf("9.81") * mpmath.mpf(rho)) + 2) / (kappa + 2))
     assert abs(psi - float(exact)) < 1e-12
-    two = simulate_path(PathScene.make(track, [body], [top], [v0], run=RunSettings.make(5)))
+    two = simulate(Scene.make(track, [body], [top], [v0], run=RunSettings.make(5)))
     assert two.status.value == "completed" and len(two.warnings) == 1 and "two-sided" in two.warnings[0]
 
 
 def test_a_body_resting_in_a_bowl_presses_on_it():
-    track = ArcChainTrack.three_arcs(1, "0.5", "0.2")
-    result = simulate_path(PathScene.make(track, [DISK], ["2.0"], [0], track_sides="one", run=RunSettings.make(20)))
+    track = ThreeArcTrack.make(1, "0.5", "0.2")
+    result = simulate(Scene.make(track, [DISK], ["2.0"], [0], track_sides="one", run=RunSettings.make(20)))
     assert result.status.value == "completed" and result.warnings == []
 
 
 def test_plastic_collision_in_a_bowl_stops_as_contact_not_overlap():
     # measured before the fix (random scene fuzz): k = 0 left the pair pressed together,
     # the gap went below zero unseen and the run ended 'completed' with a 5 cm overlap
-    track = ArcChainTrack.three_arcs(1, "0.5", "0.2")
+    track = ThreeArcTrack.make(1, "0.5", "0.2")
     a = Body.of_shape("solid_sphere", "0.06", mass=1)
     b = Body.of_shape("ring", "0.05", mass=2)
-    scene = PathScene.make(track, [a, b], ["1.5", "3.3"], ["1.0", "0"], law=heyroll.make_law("newton_generalized", 0),
+    scene = Scene.make(track, [a, b], ["1.5", "3.3"], ["1.0", "0"], law=heyroll.make_law("newton_generalized", 0),
                            limiter_restitution=1, run=RunSettings.make(10))
-    result = simulate_path(scene, keep_branches=True)
-    assert result.status.value == "contact" and "stay in contact" in result.message
+    result = simulate(scene, dense=True)
+    assert result.status.value == "contact" and "stay pressed together" in result.message
     t, X = result.sample(5000)
-    assert scene.gap(0, X[:, 0].astype(float), X[:, 2].astype(float)).min() > -1e-12
+    assert scene.gap(0, 1, X[:, 0], X[:, 1]).min() > -1e-12
 
 
 def test_a_body_pressed_against_a_plastic_limiter_stops_as_contact():
@@ -508,7 +521,7 @@ def test_a_body_pressed_against_a_plastic_limiter_stops_as_contact():
     # made the body re-hit it every 4.3e-8 s for ever (the run never ended)
     track = CurveTrack.make("-0.1*x**2*(x**2 - 1)*(23.4256 - (x**2 - 4)**2)", "-1.5", "1.5")
     ball = Body.of_shape("solid_sphere", "0.08", mass=1)
-    scene = PathScene.make(track, [ball], ["-1.2"], ["-1.0"], limiter_restitution=0, run=RunSettings.make(5))
-    result = simulate_path(scene)
+    scene = Scene.make(track, [ball], ["-1.2"], ["-1.0"], limiter_restitution=0, run=RunSettings.make(5))
+    result = simulate(scene)
     assert result.status.value == "contact" and "rest against the lower limiter" in result.message
     assert len(result.limiter_impacts) == 1

@@ -422,11 +422,11 @@ def test_issue_example_scene_first_20_collisions():
     # The issue asks 1e-13; measured 4.3e-16.
     assert cmp["t_rel"].max() <= 1e-13
     # Positions and rates: measured <= 3e-14 rad, rad/s (absolute, the rates are ~2 rad/s).
-    for name in ("phi_i", "phi_j", "dphi_i_before", "dphi_j_before", "dphi_i_after", "dphi_j_after"):
+    for name in ("q_i", "q_j", "dq_i_before", "dq_j_before", "dq_i_after", "dq_j_after"):
         assert cmp[f"{name}_abs"].max() <= 1e-12, name
     # The contact geometry: phi_j - phi_i = beta (eq. 44) at every collision.
     beta = math.acos((1.18**2 + 1.18**2 - 0.24**2) / (2 * 1.18 * 1.18))
-    assert np.allclose(table["phi_j"] - table["phi_i"], beta, rtol=0, atol=1e-14)
+    assert np.allclose(table["q_j"] - table["q_i"], beta, rtol=0, atol=1e-14)
 
 
 @pytest.mark.parametrize("high_accuracy", [False, True], ids=["no_ha", "ha"])
@@ -450,7 +450,7 @@ def test_engine_collision_table_matches_reference(name, high_accuracy):
     # Positions and rates at the collisions: an error in t moves them by
     # (rate) * dt and (acceleration) * dt, so they follow the time error.
     worst_dt = max(float(rel.max()) * float(ref.collisions[-1].t), 1e-15)
-    for col in ("phi_i", "phi_j", "dphi_i_before", "dphi_j_before", "dphi_i_after", "dphi_j_after"):
+    for col in ("q_i", "q_j", "dq_i_before", "dq_j_before", "dq_i_after", "dq_j_after"):
         assert cmp[f"{col}_abs"].max() <= 100 * worst_dt + 1e-13, col
 
 
@@ -551,17 +551,17 @@ def test_reference_collisions_satisfy_geometry_and_law():
                 rho_i, rho_j = R - bi.radius, R - bj.radius
                 beta = mpmath.acos((rho_i**2 + rho_j**2 - (bi.radius + bj.radius) ** 2) / (2 * rho_i * rho_j))
                 offset = 2 * mpmath.pi if c.j < c.i else 0
-                assert abs(c.phi_j + offset - c.phi_i - beta) < mpmath.mpf(10) ** -35
-                assert c.dphi_j_before - c.dphi_i_before < 0  # closing
-                assert c.dphi_j_after - c.dphi_i_after > 0  # opening
+                assert abs(c.q_j + offset - c.q_i - beta) < mpmath.mpf(10) ** -35
+                assert c.dq_j_before - c.dq_i_before < 0  # closing
+                assert c.dq_j_after - c.dq_i_after > 0  # opening
                 if scene.law.name == "hedrih":
                     ci, cj = rho_i / bi.radius, rho_j / bj.radius
                     Mi, Mj = bi.kappa * bi.mass * bi.radius**2, bj.kappa * bj.mass * bj.radius**2
                 else:  # newton_generalized
                     ci = cj = 1
                     Mi, Mj = bi.kappa * bi.mass * rho_i**2, bj.kappa * bj.mass * rho_j**2
-                ui, uj = ci * c.dphi_i_before, cj * c.dphi_j_before
-                ui_, uj_ = ci * c.dphi_i_after, cj * c.dphi_j_after
+                ui, uj = ci * c.dq_i_before, cj * c.dq_j_before
+                ui_, uj_ = ci * c.dq_i_after, cj * c.dq_j_after
                 assert abs((Mi * ui_ + Mj * uj_) - (Mi * ui + Mj * uj)) < mpmath.mpf(10) ** -35 * (abs(Mi * ui) + abs(Mj * uj))
                 assert abs((uj_ - ui_) + k * (uj - ui)) < mpmath.mpf(10) ** -35 * abs(uj - ui)
 
@@ -588,8 +588,8 @@ def test_reference_misses_no_contact_between_collisions():
                 for (i, j), beta in betas:
                     offset = 2 * mpmath.pi if j == 0 else 0
                     assert phis[j] + offset - phis[i] - beta > 0
-            pend[c.i - 1] = ExactPendulum(a[c.i - 1], c.phi_i, c.dphi_i_after, c.t, dps=20)
-            pend[c.j - 1] = ExactPendulum(a[c.j - 1], c.phi_j, c.dphi_j_after, c.t, dps=20)
+            pend[c.i - 1] = ExactPendulum(a[c.i - 1], c.q_i, c.dq_i_after, c.t, dps=20)
+            pend[c.j - 1] = ExactPendulum(a[c.j - 1], c.q_j, c.dq_j_after, c.t, dps=20)
 
 
 def test_reference_keeps_mechanical_energy_for_an_energy_conserving_law():

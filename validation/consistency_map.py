@@ -217,7 +217,7 @@ def engine_map(r_i: float, r_j: float, k: float):
     from heyroll.model.laws import impulse_map
 
     track, bi, bj = _bodies(r_i, r_j)
-    m = impulse_map(HedrihRollingLaw(restitution=str(k)), track, bi, bj)
+    m = impulse_map(HedrihRollingLaw(restitution=str(k)), bi, bj, track.path_radius(bi), track.path_radius(bj))
     return float(m.q), float(m.a_i), float(m.a_j)
 
 

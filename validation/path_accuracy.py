@@ -17,11 +17,12 @@ import numpy as np
 
 from heyroll.analysis.equilibria import EquilibriumProblem, find_equilibria
 from heyroll.model.bodies import Body
-from heyroll.model.path_scene import PathScene
-from heyroll.model.paths import ArcChainTrack, CurveTrack, Frame, Segment
+from heyroll.model.scene import Scene
+from heyroll.model.frame import Frame
+from heyroll.model.tracks import ArcChainTrack, CurveTrack, Segment, ThreeArcTrack
 from heyroll.model.scene import RunSettings
 from heyroll.reference.equilibria import equilibrium_roots
-from heyroll.simulation.path_driver import simulate_path
+from heyroll.simulation.driver import simulate
 
 REPORT = Path(__file__).resolve().parent / "reports" / "path_accuracy.md"
 DISK = Body.of_shape("disk", "0.05", mass="1")
@@ -32,15 +33,15 @@ CURVES = ["0.5*x**2*(x**2 - 1)**2", "0.02*x**2*(x**2 - 1)**2*(x**2 - 4)",
 def scenes():
     curve = CurveTrack.make(CURVES[0], "-1.6", "1.6")
     yield ("rotating curve y = 0.5 x^2 (x^2 - 1)^2, Omega = 3, outer well (x0 = 1.3)",
-           PathScene.make(curve, [DISK], ["1.3"], [0], frame=Frame.make(3, 0)))
-    chain = ArcChainTrack.three_arcs(1, "0.5", "0.2")
+           Scene.make(curve, [DISK], ["1.3"], [0], frame=Frame.make(3, 0)))
+    chain = ThreeArcTrack.make(1, "0.5", "0.2")
     yield ("rotating three-arc chain, Omega = 1.5, axis x = 0.1, rolling onto the hump and back",
-           PathScene.make(chain, [DISK], ["0.6"], [0], frame=Frame.make("1.5", "0.1")))
+           Scene.make(chain, [DISK], ["0.6"], [0], frame=Frame.make("1.5", "0.1")))
 
 
 def period(scene) -> float:
     """Mean period from the sign changes of q' over a short sampled run."""
-    res = simulate_path(scene, t_end=60.0, keep_branches=True, precision="double")
+    res = simulate(scene, t_end=60.0, dense=True, precision="double")
     t, X = res.sample(60001)
     v = X[:, 1].astype(float)
     crossings = t[1:][np.sign(v[1:]) != np.sign(v[:-1])]
@@ -54,7 +55,7 @@ def drift_study(oscillations: int) -> list[dict]:
         t_end = oscillations * T
         for precision in ("double", "long"):
             started = time.perf_counter()
-            res = simulate_path(scene, t_end=t_end, precision=precision)
+            res = simulate(scene, t_end=t_end, precision=precision)
             wall = time.perf_counter() - started
             scale = max(abs(res.energy_initial), float(scene.bodies[0].mass * scene.g))
             rows.append(dict(scene=label, precision=precision, period=T, oscillations=t_end / T,
@@ -85,10 +86,10 @@ def event_study() -> tuple[float, float]:
                                 Segment("arc", mpmath.mpf(2), "concave", a, mpmath.mpf("1.0"))])
     ball = Body.of_shape("solid_sphere", "0.1", mass=1)
     acc = mpmath.mpf("9.81") * mpmath.sin(mpmath.mpf(theta)) * 5 / 7
-    res = simulate_path(PathScene.make(chain, [ball], ["0.5"], [0], run=RunSettings.make(3)))
+    res = simulate(Scene.make(chain, [ball], ["0.5"], [0], run=RunSettings.make(3)))
     exact = mpmath.sqrt(2 * (mpmath.mpf(L) - mpmath.mpf("0.5")) / acc)
     junction = abs(res.junctions[0]["t"] - float(exact)) / float(exact)
-    res = simulate_path(PathScene.make(chain, [ball], ["1.5"], [-3], run=RunSettings.make(1)))
+    res = simulate(Scene.make(chain, [ball], ["1.5"], [-3], run=RunSettings.make(1)))
     exact = (3 - mpmath.sqrt(9 - 2 * acc * mpmath.mpf("1.5"))) / acc
     limiter = abs(res.limiter_impacts[0]["t"] - float(exact)) / float(exact)
     return junction, limiter

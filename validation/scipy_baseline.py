@@ -82,7 +82,7 @@ def problem_from_scene(scene) -> BaselineProblem:
     for p in scene.pairs:
         if not p.reachable:  # heyroll compiles no event for these either
             continue
-        m = impulse_map(scene.law, track, scene.bodies[p.i], scene.bodies[p.j])
+        m = impulse_map(scene.law, scene.bodies[p.i], scene.bodies[p.j], scene.sigma(p.i), scene.sigma(p.j))
         pairs.append(BaselinePair(p.i, p.j, float(p.gap_constant()), float(m.q), float(m.a_i), float(m.a_j)))
     y0 = np.array([float(x) for x in scene.phi] + [float(x) for x in scene.dphi])
     return BaselineProblem(a=a, pairs=tuple(pairs), y0=y0)

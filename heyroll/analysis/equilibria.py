@@ -25,8 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.bodies import Body
-from ..model.path_scene import PathScene, piece_index
-from ..model.paths import STATIONARY, ArcChainTrack, CurveTrack, Frame
+from ..model.frame import STATIONARY, Frame
+from ..model.scene import Scene
+from ..model.tracks import ArcChainTrack, CurveTrack, piece_index
 
 #: Samples per unit of the track's parameter range used to bracket roots.
 BRACKET_SAMPLES = 20001
@@ -101,7 +102,7 @@ class EquilibriumProblem:
 
     def centre(self, q):
         if isinstance(self.track, CurveTrack):
-            return self.track.centre(np.asarray(q, dtype=float), float(self.body.radius))
+            return self.track.centre_at(np.asarray(q, dtype=float), float(self.body.radius))
         _a, _c, x_c, y_c = self._chain(q)
         return x_c, y_c
 
@@ -121,7 +122,7 @@ class EquilibriumProblem:
         return EquilibriumProblem(self.track, self.body, Frame.make(omega, self.frame.axis_x), self.g)
 
 
-def problem_of(scene: PathScene, body: int = 0) -> EquilibriumProblem:
+def problem_of(scene: Scene, body: int = 0) -> EquilibriumProblem:
     return EquilibriumProblem(scene.track, scene.bodies[body], scene.frame, float(scene.g))
 
 

@@ -560,7 +560,7 @@ def paper_method_first_collision(
         if not ref:
             return fail("no_collision", "the exact reference has no collision before t_end", **common)
         first = ref[0]
-        t_exact, phi_exact = mpmath.mpf(first.t), mpmath.mpf(first.phi_i)
+        t_exact, phi_exact = mpmath.mpf(first.t), mpmath.mpf(first.q_i)
         common.update(t_exact=float(t_exact), phi_exact=float(phi_exact))
         if (first.i, first.j) != (1, 2):
             return fail(
@@ -570,7 +570,7 @@ def paper_method_first_collision(
             )
         # Monotone arcs up to the exact collision?
         problems = []
-        for n, (arc, phi_c) in enumerate(zip(arcs, (first.phi_i, first.phi_j)), start=1):
+        for n, (arc, phi_c) in enumerate(zip(arcs, (first.q_i, first.q_j)), start=1):
             if arc.direction == 0:
                 if abs(mpmath.mpf(phi_c) - arc.phi0) > mpmath.mpf(10) ** (-dps // 2):
                     problems.append(f"body {n} rests at phi = {mpmath.nstr(arc.phi0, 6)} but is hit elsewhere")
@@ -592,7 +592,7 @@ def paper_method_first_collision(
                 **common,
             )
         common["ratio"] = tuple(
-            float(arc.ratio(mpmath.mpf(p))) for arc, p in zip(arcs, (first.phi_i, first.phi_j))
+            float(arc.ratio(mpmath.mpf(p))) for arc, p in zip(arcs, (first.q_i, first.q_j))
         )
         solved = _solve(kind, arcs[0], arcs[1], beta, scan_points, dps)
         if solved is None:

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from ..errors import SceneError
-from ..model.path_scene import PathScene
+from ..model.scene import Scene
 from ..simulation.driver import simulate
 from ..simulation.precision import Precision
 from .scene_file import default_scene, default_scene_text, load_scene
@@ -64,12 +64,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--t-end", dest="t_end", help="end time in s (overrides [run] t_end)")
     run.add_argument("--max-collisions", dest="max_collisions", help="stop after N collisions")
     run.add_argument(
-        "--precision", default=None,
-        help="circle: double | quad | mp:BITS, the whole integration in that type (default: double); "
-             "curve and arc tracks: double | long (x87 extended, the default)"
+        "--precision", default="double",
+        help="double | long (x87 extended) | quad | mp:BITS: the whole integration, every event and collision "
+             "map in that type (default: double)"
     )
     run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (measured: no gain on collision times or energy, ~1%% cost)")
-    run.add_argument("--no-figures", action="store_true", help="skip phase_portrait.png and energy.png")
+    run.add_argument("--no-figures", action="store_true", help="skip the figures (phase_portrait.png, energy.png)")
     run.add_argument(
         "--table", choices=("csv", "npy"), default="csv",
         help="collision table format: csv (default) or npy (float64 columns, for long runs; numpy.load reads it)",
@@ -120,11 +120,9 @@ def _run(args) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise BadInput("--out", f"{out} exists and is not a directory")
-    if isinstance(scene, PathScene):
-        return _run_path(args, scene, out, t_end, max_collisions)
-    precision = Precision.parse(args.precision or "double", "--precision")
+    precision = Precision.parse(args.precision, "--precision")
     if args.table == "npy" and precision.name != "double":
-        raise BadInput("--table", "npy holds float64 columns: use csv for quad and MPFR runs")
+        raise BadInput("--table", "npy holds float64 columns: use csv for long, quad and MPFR runs")
     from .outputs import table_sink, write_run
 
     sink = table_sink(out, args.table)
@@ -137,15 +135,17 @@ def _run(args) -> int:
     rate = result.n_collisions / result.wall_time_s if result.wall_time_s > 0 else float("nan")
     print(f"{scene.describe()}")
     print(f"{result.status.value}: {result.message}")
+    for warning in result.settings.get("warnings", []):
+        print(f"warning: {warning}")
+    passages = result.summary()
     print(
-        f"{result.n_collisions} collisions, t_final = {float(result.t_final):.17g} s, "
+        f"{result.n_collisions} collisions, {passages['limiter_impacts']} limiter impacts, "
+        f"{passages['junction_passages']} junction passages, t_final = {float(result.t_final):.17g} s, "
         f"energy {result.energy_initial:.17g} -> {result.energy_final:.17g} J, "
         f"{result.wall_time_s:.3g} s wall ({rate:.3g} collisions/s incl. set-up)"
     )
     print(f"wrote {out}/")
-    if result.status.value == "interrupted":
-        return EXIT_INTERRUPTED
-    return EXIT_OK if result.success else EXIT_RUN_FAILED
+    return result.status.exit_code
 
 
 @contextlib.contextmanager
@@ -190,14 +190,15 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
-def _path_scene(path: str, command: str) -> PathScene:
+def _path_scene(path: str, command: str) -> Scene:
     scene = load_scene(path)
-    if not isinstance(scene, PathScene):
-        raise BadInput("track.type", f"'heyroll {command}' needs a curve, arcs or three_arcs track, got circle")
+    if scene.track.closed:
+        raise BadInput("track.type", f"'heyroll {command}' needs an open track (curve, arcs or three_arcs), "
+                       f"got {scene.track.kind}")
     return scene
 
 
-def _body_number(text: str, scene: PathScene) -> int:
+def _body_number(text: str, scene: Scene) -> int:
     n = _collision_count(text, "--body")
     if not 1 <= n <= len(scene.bodies):
         raise BadInput("--body", f"must be in 1..{len(scene.bodies)}, got {n}")
@@ -207,7 +208,7 @@ def _body_number(text: str, scene: PathScene) -> int:
 def _equilibria(args) -> int:
     import json
 
-    from .path_outputs import equilibria_list
+    from .portrait import equilibria_list
 
     scene = _path_scene(args.scene, "equilibria")
     body = _body_number(args.body, scene)
@@ -226,7 +227,7 @@ def _equilibria(args) -> int:
 def _portrait(args) -> int:
     import numpy as np
 
-    from .path_outputs import default_omegas, write_portrait
+    from .portrait import default_omegas, write_portrait
 
     scene = _path_scene(args.scene, "portrait")
     body = _body_number(args.body, scene)
@@ -257,36 +258,6 @@ def _positive_number(text: str, field: str) -> float:
     if not math.isfinite(value) or value <= 0:
         raise BadInput(field, f"must be a finite number > 0, got {text}")
     return value
-
-
-def _run_path(args, scene: PathScene, out: Path, t_end, max_collisions) -> int:
-    from ..simulation.path_driver import simulate_path
-    from .path_outputs import write_path_run
-
-    precision = args.precision or "long"
-    if precision not in ("double", "long"):
-        raise BadInput("--precision", f"curve and arc tracks run in double or long, got {precision!r}")
-    if args.table != "csv":
-        raise BadInput("--table", "path-track runs write csv")
-    with _sigterm_as_interrupt():
-        try:
-            result = simulate_path(scene, t_end=t_end, max_collisions=None if max_collisions is ... else max_collisions,
-                                   keep_branches=not args.no_figures, precision=precision)
-        except KeyboardInterrupt:
-            print("heyroll: interrupted", file=sys.stderr)
-            return EXIT_INTERRUPTED
-    write_path_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures)
-    n = len(scene.bodies)
-    print(f"{scene.name}: {n} bod{'y' if n == 1 else 'ies'} on a track of type {scene.track.kind}, "
-          f"Omega = {float(scene.frame.omega):.6g} rad/s")
-    print(f"{result.status.value}: {result.message}")
-    for warning in result.warnings:
-        print(f"warning: {warning}")
-    print(f"{result.n_collisions} collisions, {len(result.limiter_impacts)} limiter impacts, "
-          f"{len(result.junctions)} junction crossings, t_final = {result.t_final:.17g} s, "
-          f"first integral {result.energy_initial:.17g} -> {result.energy_final:.17g} J, {result.wall_time:.3g} s wall")
-    print(f"wrote {out}/")
-    return EXIT_OK if result.status.success else EXIT_RUN_FAILED
 
 
 def _validate(args) -> int:

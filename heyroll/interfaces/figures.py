@@ -13,7 +13,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from ..simulation.result import SimulationResult, body_energies
+from ..simulation.result import SimulationResult
 from ..simulation.trajectory import sample_branches
 
 #: Branches drawn in a phase portrait: beyond a few dozen the jumps blur.
@@ -53,10 +53,10 @@ def phase_portrait_figure(result: SimulationResult, path: Path, *, collisions: i
         for side in ("i", "j"):
             rows = table[table[side] == k + 1]
             if rows.size:
-                phi = rows[f"phi_{side}"]
-                ax.vlines(phi, rows[f"dphi_{side}_before"], rows[f"dphi_{side}_after"], colors="k", linestyles="--", lw=0.8)
-                ax.plot(phi, rows[f"dphi_{side}_before"], "o", ms=3.5, color="k", label=None)
-                ax.plot(phi, rows[f"dphi_{side}_after"], "s", ms=3.5, mfc="white", mec="k")
+                phi = rows[f"q_{side}"]
+                ax.vlines(phi, rows[f"dq_{side}_before"], rows[f"dq_{side}_after"], colors="k", linestyles="--", lw=0.8)
+                ax.plot(phi, rows[f"dq_{side}_before"], "o", ms=3.5, color="k", label=None)
+                ax.plot(phi, rows[f"dq_{side}_after"], "s", ms=3.5, mfc="white", mec="k")
         ax.set_ylabel(f"$\\dot\\varphi_{k + 1}$ (rad/s)")
         ax.set_title(f"body {k + 1}: {result.scene.bodies[k].describe()}", fontsize=9)
         if k == 0:
@@ -92,7 +92,6 @@ def _branch_colours(n: int):
 
 def energy_figure(result: SimulationResult, path: Path) -> None:
     """Mechanical energy of each body and of the system across collisions (4.2.6)."""
-    c = result.constants()
     streamed = result.kept_collisions < result.n_collisions
     t_last = [] if streamed else [float(result.t_final)]
     t = np.concatenate([[0.0], np.asarray(result.times, dtype=float), t_last])
@@ -100,7 +99,7 @@ def energy_figure(result: SimulationResult, path: Path) -> None:
     states += list(np.asarray(result.states_after, dtype=float))
     if not streamed:
         states.append(np.asarray(result.final_state, dtype=float))
-    energies = body_energies(c, np.array(states))
+    energies = result.body_energies(np.array(states))
     fig = Figure(figsize=(8, 4.2), layout="constrained")
     ax = fig.add_subplot(1, 1, 1)
     for k in range(result.n_bodies):
@@ -120,3 +119,34 @@ def energy_figure(result: SimulationResult, path: Path) -> None:
     )
     ax.legend(fontsize=8)
     _save(fig, path)
+
+
+#: Open tracks: the figures show at most this many collisions of a run (a dense re-run up to there).
+FIGURE_COLLISIONS = 60
+
+
+def run_figures(result: SimulationResult, out_dir: Path) -> dict:
+    """phase_portrait.png and energy.png of a run, on every track; returns {name: file}.
+
+    On the circle the branches are re-integrated between the recorded
+    collisions (simulation.trajectory). On an open track the figures come
+    from heyoka's continuous output of the same run repeated with
+    ``dense=True`` up to the FIGURE_COLLISIONS-th collision (junction
+    parameters switch inside that run, so no re-integration could skip them).
+    """
+    if result.scene.track.linear_gap:
+        phase_portrait_figure(result, out_dir / "phase_portrait.png")
+        energy_figure(result, out_dir / "energy.png")
+    else:
+        from ..simulation.driver import simulate
+        from .portrait_figures import body_energy_figure, branches_figure
+
+        t_end = float(result.t_final)
+        if result.n_collisions > FIGURE_COLLISIONS and result.kept_collisions > FIGURE_COLLISIONS:
+            t_end = float(result.times[FIGURE_COLLISIONS])
+        if not t_end > 0:
+            t_end = float(result.scene.run.t_end)
+        dense = simulate(result.scene, t_end=t_end, max_collisions=None, precision="double", dense=True)
+        branches_figure(dense, out_dir / "phase_portrait.png")
+        body_energy_figure(dense, out_dir / "energy.png")
+    return {"phase_portrait": "phase_portrait.png", "energy": "energy.png"}

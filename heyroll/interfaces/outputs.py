@@ -172,12 +172,15 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
         sink.write((result.times, result.pair_numbers, result.states_before, result.states_after, result.law_flags), 1)
         sink.close()
     files = {"collisions": Path(sink.path).name, "summary": "summary.json"}
+    if result.scene.domain(0) is not None:  # an open track: junction passages and limiter impacts
+        passages = result.passage_table()
+        text = collisions_csv(passages, 17)
+        atomic_write_text(out_dir / "passages.csv", text)
+        files["passages"] = "passages.csv"
     if figures:
-        from .figures import energy_figure, phase_portrait_figure
+        from .figures import run_figures
 
-        phase_portrait_figure(result, out_dir / "phase_portrait.png")
-        energy_figure(result, out_dir / "energy.png")
-        files.update(phase_portrait="phase_portrait.png", energy="energy.png")
+        files.update(run_figures(result, out_dir))
     summary = summary_dict(result, scene_source=scene_source, files=files)
     summary["table_format"] = sink.format
     summary["table_rows"] = sink.rows

@@ -16,19 +16,18 @@ from ..errors import SceneError, SceneFileError
 from ..model._numbers import is_finite, is_number, to_mpf, workprec
 from ..model.bodies import Body, parse_shape
 from ..model.laws import make_law
+from ..model.frame import Frame
 from ..model.scene import STANDARD_GRAVITY, RunSettings, Scene
-from ..model.path_scene import PathScene
-from ..model.paths import ArcChainTrack, CurveTrack, Frame, Segment
-from ..model.tracks import CircleTrack
+from ..model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment, ThreeArcTrack
 
 TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "frame"}
 TRACK_KEYS = {"type", "radius", "friction", "sides"}
 TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs")
 #: Keys of each path track type (paper section 5).
 PATH_TRACK_KEYS = {
-    "curve": {"type", "y", "x_min", "x_max", "limiter_restitution", "sides"},
-    "arcs": {"type", "segments", "start_x", "start_y", "limiter_restitution", "sides"},
-    "three_arcs": {"type", "radius", "hump_radius", "beta", "limiter_restitution", "sides"},
+    "curve": {"type", "y", "x_min", "x_max", "limiter_restitution", "sides", "friction"},
+    "arcs": {"type", "segments", "start_x", "start_y", "limiter_restitution", "sides", "friction"},
+    "three_arcs": {"type", "radius", "hump_radius", "beta", "limiter_restitution", "sides", "friction"},
 }
 SEGMENT_KEYS = {"arc": {"kind", "radius", "side", "start", "end"}, "line": {"kind", "angle", "length"}}
 FRAME_KEYS = {"omega", "axis_x"}
@@ -43,7 +42,7 @@ COLLISION_KEYS = {"law", "restitution", "on_inconsistent"}
 RUN_KEYS = {"t_end", "max_collisions"}
 
 
-def load_scene(path: str | Path) -> Scene | PathScene:
+def load_scene(path: str | Path) -> Scene:
     """Read and check a scene file; raises SceneError (a ValueError) on bad input."""
     path = Path(path)
     try:
@@ -65,7 +64,7 @@ def default_scene_text() -> str:
     return resources.files("heyroll").joinpath("scenes/default.toml").read_text(encoding="utf-8")
 
 
-def parse_scene(text: str, *, source: str = "<scene>", default_name: str = "scene") -> Scene | PathScene:
+def parse_scene(text: str, *, source: str = "<scene>", default_name: str = "scene") -> Scene:
     try:
         data = tomllib.loads(text, parse_float=Decimal)
     except tomllib.TOMLDecodeError as exc:
@@ -73,7 +72,7 @@ def parse_scene(text: str, *, source: str = "<scene>", default_name: str = "scen
     return scene_from_dict(data, default_name=default_name)
 
 
-def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene | PathScene:
+def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
     _no_unknown(data, TOP_KEYS, "")
     name = data.get("name", default_name)
     if not isinstance(name, str):
@@ -82,11 +81,7 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene | PathS
     track_table = _table(data, "track", required=True)
     if isinstance(track_table.get("type"), str) and track_table["type"] in PATH_TRACK_KEYS:  # [] / {}: unhashable
         return _path_scene(data, track_table, name, g)
-    if "frame" in data:
-        frame = _frame(_table(data, "frame", required=False))
-        if frame.rotating:
-            raise SceneError("frame.omega", "a rotating plane needs track type curve, arcs or three_arcs "
-                             "(a circle is type = \"arcs\" with one concave segment)")
+    frame = _frame(_table(data, "frame", required=False))
     track = _track(track_table)
     friction = _number(track_table, "friction", "track")
     sides = track_table.get("sides", "two")
@@ -101,8 +96,8 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene | PathS
         dphis.append(dphi)
     law, policy, settings = _collision_and_run(data)
     return Scene.make(
-        track=track, bodies=bodies, phi=phis, dphi=dphis, law=law, g=g, run=settings, name=name,
-        friction=friction, on_inconsistent=policy, track_sides=sides,
+        track, bodies, phis, dphis, law=law, g=g, run=settings, name=name,
+        friction=friction, on_inconsistent=policy, track_sides=sides, frame=frame,
     )
 
 
@@ -118,7 +113,7 @@ def _path_track(table: dict):
         return CurveTrack.make(table.get("y"), _number(table, "x_min", "track", required=True),
                                _number(table, "x_max", "track", required=True))
     if kind == "three_arcs":
-        return ArcChainTrack.three_arcs(_number(table, "radius", "track", required=True),
+        return ThreeArcTrack.make(_number(table, "radius", "track", required=True),
                                         _number(table, "hump_radius", "track", required=True),
                                         _number(table, "beta", "track", default="0"))
     segments_data = table.get("segments")
@@ -145,7 +140,7 @@ def _path_track(table: dict):
                               _number(table, "start_y", "track", default="0"))
 
 
-def _path_scene(data: dict, track_table: dict, name: str, g) -> PathScene:
+def _path_scene(data: dict, track_table: dict, name: str, g) -> Scene:
     track = _path_track(track_table)
     frame = _frame(_table(data, "frame", required=False))
     kind = "curve" if isinstance(track, CurveTrack) else "arcs"
@@ -177,10 +172,10 @@ def _path_scene(data: dict, track_table: dict, name: str, g) -> PathScene:
         qs.append(q)
         dqs.append(dq)
     law, policy, settings = _collision_and_run(data)
-    return PathScene.make(track, bodies, qs, dqs, law=law,
-                          limiter_restitution=_number(track_table, "limiter_restitution", "track"),
-                          frame=frame, g=g, run=settings, name=name, on_inconsistent=policy,
-                          track_sides=_sides(track_table))
+    return Scene.make(track, bodies, qs, dqs, law=law,
+                      limiter_restitution=_number(track_table, "limiter_restitution", "track"),
+                      frame=frame, g=g, run=settings, name=name, on_inconsistent=policy,
+                      track_sides=_sides(track_table), friction=_number(track_table, "friction", "track"))
 
 
 def _sides(table: dict) -> str:

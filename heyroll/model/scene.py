@@ -1,10 +1,11 @@
 """A scene: gravity, a track, bodies with their initial states, a collision law.
 
-Bodies are numbered 1..N in scene order, which must be counter-clockwise
-around the circle (paper section 4: phi_2 = phi_1 + beta at contact).
-Neighbours (i, i+1) can touch, and so can (N, 1) across the top of the circle
-(the wrap-around pair): a body that goes over the top can hit its neighbour
-from the other side.
+One scene type for every track. Bodies are numbered 1..N in scene order:
+counter-clockwise around a circle (paper section 4: phi_2 = phi_1 + beta at
+contact), in increasing coordinate along an open track (an arc chain, a
+curve). Neighbours (i, i+1) can touch, and on a closed track so can (N, 1)
+across the top (the wrap-around pair). q is each body's generalized
+coordinate (phi, s or x, as the track says) and dq its rate.
 """
 
 from __future__ import annotations
@@ -12,12 +13,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import mpmath
+import numpy as np
 
 from ..errors import SceneError
 from ._numbers import Real, is_finite, to_mpf, workprec
 from .bodies import Body
+from .frame import STATIONARY, Frame
 from .laws import CollisionLaw, HedrihRollingLaw, ImpulseMap, conserves_mechanical_energy_bound, impulse_map
-from .tracks import CircleTrack, mechanical_energy
+from .laws.base import check_restitution
+from .tracks import Track, first_integral, mechanical_energy
 
 STANDARD_GRAVITY = "9.81"
 
@@ -51,25 +55,29 @@ class RunSettings:
 
 @dataclass(frozen=True)
 class ContactPair:
-    """Two neighbours that can touch; the gap is phi_j + offset - phi_i - beta >= 0.
+    """Two neighbours that can touch.
 
-    ``i`` is the body on the clockwise side, ``j`` the one counter-clockwise
-    of it (0-based indices); ``offset`` is 2 pi for the wrap-around pair (N, 1).
+    ``i`` is the body before (clockwise of, on a circle) ``j`` (0-based). On a
+    track with a linear gap (the circle) the gap is q_j - q_i + ``constant``
+    with constant = offset - beta, ``offset`` 2 pi for the wrap-around pair;
+    ``law_map`` is the law compiled for the pair where the metric is constant
+    (None elsewhere: the engine maps at each contact); ``reachable`` is False
+    where the scene's energy can never bring the pair together.
     """
 
     i: int
     j: int
-    beta: mpmath.mpf
-    offset: mpmath.mpf
-    law_map: ImpulseMap
-    reachable: bool
+    beta: mpmath.mpf = mpmath.mpf(0)
+    offset: mpmath.mpf = mpmath.mpf(0)
+    law_map: ImpulseMap | None = None
+    reachable: bool = True
 
     @property
     def wraps(self) -> bool:
         return self.offset != 0
 
     def gap_constant(self) -> mpmath.mpf:
-        """offset - beta, the constant term of the gap function, at model precision."""
+        """offset - beta, the constant term of a linear gap, at model precision."""
         with workprec():
             return self.offset - self.beta
 
@@ -79,10 +87,10 @@ class Scene:
     """Everything a run needs. Build it with :meth:`Scene.make`, which checks the rules."""
 
     g: mpmath.mpf
-    track: CircleTrack
+    track: Track
     bodies: tuple[Body, ...]
-    phi: tuple[mpmath.mpf, ...]
-    dphi: tuple[mpmath.mpf, ...]
+    q: tuple[mpmath.mpf, ...]
+    dq: tuple[mpmath.mpf, ...]
     law: CollisionLaw
     run: RunSettings
     name: str = "scene"
@@ -91,19 +99,25 @@ class Scene:
     #: What to do when the law's outcome leaves two bodies approaching: "newton" or "error".
     on_inconsistent: str = "newton"
     #: "two": the track guides the bodies on both sides (rolling elements between two
-    #: races; eq. 25 holds whatever the normal force); "one": bodies rest on the inside
-    #: of the circle and a run stops when one would leave it (normal force 0).
+    #: races; the motion holds whatever the normal force); "one": bodies rest on the
+    #: track and a run stops where one would leave it (normal force 0).
     track_sides: str = "two"
+    #: The vertical plane, fixed or turning about a vertical axis.
+    frame: Frame = STATIONARY
+    #: Restitution at the limiters of an open track (q' -> -k q').
+    limiter_restitution: mpmath.mpf = mpmath.mpf(1)
     pairs: tuple[ContactPair, ...] = field(default=(), compare=False)
 
     @classmethod
     def make(
         cls,
-        *,
-        track: CircleTrack,
+        track: Track,
         bodies,
-        phi,
-        dphi,
+        q=None,
+        dq=None,
+        *,
+        phi=None,
+        dphi=None,
         law: CollisionLaw | None = None,
         g: Real = STANDARD_GRAVITY,
         run: RunSettings | None = None,
@@ -111,22 +125,28 @@ class Scene:
         friction: Real | None = None,
         on_inconsistent: str = "newton",
         track_sides: str = "two",
+        frame: Frame = STATIONARY,
+        limiter_restitution: Real | None = None,
     ) -> "Scene":
+        """``q``/``dq`` (or, on a circle, their names ``phi``/``dphi``): one per body."""
+        q = phi if q is None else q
+        dq = dphi if dq is None else dq
         bodies = tuple(bodies)
         if not bodies:
             raise SceneError("bodies", "at least one body is required")
-        if len(phi) != len(bodies) or len(dphi) != len(bodies):
-            raise SceneError("bodies", "need one phi and one dphi per body")
+        if q is None or dq is None or len(q) != len(bodies) or len(dq) != len(bodies):
+            raise SceneError("bodies", f"need one {track.coordinate} and one d{track.coordinate} per body")
         if not is_finite(g):
             raise SceneError("g", f"must be a finite number, got {g!r}")
         gv = to_mpf(g)
         if gv <= 0 or float(gv) == 0:
             raise SceneError("g", f"must be > 0 (and at least 1e-300), got {g}")
+        law = law if law is not None else HedrihRollingLaw()
         for n, body in enumerate(bodies, start=1):
             track.check_body(body, f"bodies[{n}]")
-        phis = tuple(_finite(p, f"bodies[{n}].phi") for n, p in enumerate(phi, start=1))
-        dphis = tuple(_finite(v, f"bodies[{n}].dphi") for n, v in enumerate(dphi, start=1))
-        law = law if law is not None else HedrihRollingLaw()
+        c = track.coordinate
+        qs = tuple(_finite(p, f"bodies[{n}].{c}") for n, p in enumerate(q, start=1))
+        dqs = tuple(_finite(v, f"bodies[{n}].d{c}") for n, v in enumerate(dq, start=1))
         mu = None
         if friction is not None:
             if not is_finite(friction) or to_mpf(friction) < 0:
@@ -139,25 +159,86 @@ class Scene:
             )
         if track_sides not in ("one", "two"):
             raise SceneError("track.sides", f"must be 'one' or 'two', got {track_sides!r}")
+        k_lim = law.restitution if limiter_restitution is None else limiter_restitution
+        try:
+            k_lim = check_restitution(k_lim)
+        except SceneError as exc:
+            raise SceneError("track.limiter_restitution", exc.rule) from None
         scene = cls(
-            g=gv,
-            track=track,
-            bodies=bodies,
-            phi=phis,
-            dphi=dphis,
-            law=law,
-            run=run or RunSettings.make(),
-            name=name,
-            track_friction=mu,
-            on_inconsistent=on_inconsistent,
-            track_sides=track_sides,
+            g=gv, track=track, bodies=bodies, q=qs, dq=dqs, law=law, run=run or RunSettings.make(), name=name,
+            track_friction=mu, on_inconsistent=on_inconsistent, track_sides=track_sides, frame=frame,
+            limiter_restitution=k_lim,
         )
-        object.__setattr__(scene, "pairs", scene._contact_pairs())
+        pairs = scene._linear_gap_pairs() if track.linear_gap else scene._open_pairs()
+        object.__setattr__(scene, "pairs", pairs)
         return scene
 
-    # -- geometry -----------------------------------------------------------
+    # -- names ----------------------------------------------------------------
 
-    def _contact_pairs(self) -> tuple[ContactPair, ...]:
+    @property
+    def phi(self) -> tuple:
+        """The coordinates q (named phi on a circle)."""
+        return self.q
+
+    @property
+    def dphi(self) -> tuple:
+        return self.dq
+
+    @property
+    def coordinate(self) -> str:
+        return self.track.coordinate
+
+    # -- geometry -------------------------------------------------------------
+
+    def sigma(self, n: int, q=None):
+        """|dC/dq| of body n (0-based) at q (default: its initial coordinate), model precision where constant."""
+        body = self.bodies[n]
+        if self.track.linear_gap:  # the circle: sigma = R - r
+            return self.track.path_radius(body)
+        return to_mpf(float(self.track.sigma(body, float(self.q[n] if q is None else q))))
+
+    def centre(self, n: int, q):
+        """Centre (x_C, y_C) of body n at coordinate(s) q, float64."""
+        return self.track.centre(self.bodies[n], q)
+
+    def gap(self, i: int, j: int, q_i, q_j):
+        """Distance between the surfaces of bodies i and j at coordinates q_i, q_j (m), float64."""
+        xi, yi = self.centre(i, q_i)
+        xj, yj = self.centre(j, q_j)
+        d = float(self.bodies[i].radius + self.bodies[j].radius)
+        if d == 0:  # two particles on one curve: a signed distance along it
+            return np.sign(np.asarray(q_j, float) - np.asarray(q_i, float)) * np.hypot(xj - xi, yj - yi)
+        return np.hypot(xj - xi, yj - yi) - d
+
+    def domain(self, n: int):
+        """Where body n's coordinate may go (limiters), floats; None on a closed track."""
+        d = self.track.domain(self.bodies[n])
+        return None if d is None else (float(d[0]), float(d[1]))
+
+    def _open_pairs(self) -> tuple[ContactPair, ...]:
+        """Neighbours along an open track; the law compiled once where the metric is constant."""
+        c = self.track.coordinate
+        for n in range(len(self.bodies)):
+            lo, hi = self.track.domain(self.bodies[n])
+            if not lo <= self.q[n] <= hi:
+                raise SceneError(f"bodies[{n + 1}].{c}",
+                                 f"must be on the track: [{float(lo):.17g}, {float(hi):.17g}], got {float(self.q[n]):.17g}")
+        pairs = []
+        for i in range(len(self.bodies) - 1):
+            j = i + 1
+            if not self.q[i] < self.q[j]:
+                raise SceneError(f"bodies[{j + 1}].{c}",
+                                 "bodies must be listed in order along the track (increasing coordinate)")
+            gap = float(self.gap(i, j, float(self.q[i]), float(self.q[j])))
+            if gap < 0:
+                raise SceneError(f"bodies[{j + 1}].{c}", f"body {j + 1} overlaps body {i + 1} (gap {gap:.3g} m)")
+            law_map = None
+            if self.track.constant_metric:
+                law_map = impulse_map(self.law, self.bodies[i], self.bodies[j], self.sigma(i), self.sigma(j))
+            pairs.append(ContactPair(i=i, j=j, law_map=law_map))
+        return tuple(pairs)
+
+    def _linear_gap_pairs(self) -> tuple[ContactPair, ...]:
         n = len(self.bodies)
         if n == 1:
             return ()
@@ -174,8 +255,9 @@ class Scene:
         with workprec():
             if mpmath.fsum(betas) >= 2 * mpmath.pi:
                 raise SceneError("bodies", "the bodies do not fit around the circle (sum of contact angles >= 2 pi)")
+        sigma = [self.track.path_radius(b) for b in self.bodies]
         energy_bounded = all(
-            conserves_mechanical_energy_bound(self.law, self.track, self.bodies[i], self.bodies[j])
+            conserves_mechanical_energy_bound(self.law, self.bodies[i], self.bodies[j], sigma[i], sigma[j])
             for i, j in neighbours
         )
         energy = self.total_energy()
@@ -193,7 +275,7 @@ class Scene:
                     f"counter-clockwise with neighbours at least beta = {mpmath.nstr(beta, 10)} rad apart",
                 )
             reachable = True
-            if energy_bounded:
+            if energy_bounded and not self.frame.rotating:
                 reachable = energy >= self._least_contact_energy(i, j, beta, wraps) * (1 - mpmath.mpf(10) ** -9)
             pairs.append(
                 ContactPair(
@@ -201,7 +283,7 @@ class Scene:
                     j=j,
                     beta=beta,
                     offset=offset,
-                    law_map=impulse_map(self.law, self.track, self.bodies[i], self.bodies[j]),
+                    law_map=impulse_map(self.law, self.bodies[i], self.bodies[j], sigma[i], sigma[j]),
                     reachable=reachable,
                 )
             )
@@ -226,8 +308,13 @@ class Scene:
     # -- energy -------------------------------------------------------------
 
     def body_energy(self, n: int, phi=None, dphi=None):
-        """Mechanical energy of body n (0-based) at model precision (eq. 26)."""
+        """Mechanical energy of body n (0-based): on a fixed circle at model precision
+        (eq. 26, zero at the lowest point), else the first integral of eq. (92) (float64)."""
         body = self.bodies[n]
+        q = self.q[n] if phi is None else phi
+        dq = self.dq[n] if dphi is None else dphi
+        if not self.track.linear_gap or self.frame.rotating:
+            return to_mpf(float(first_integral(self.track, body, float(q), float(dq), self.g, self.frame)))
         with workprec():
             return mechanical_energy(
                 self.track.generalized_mass(body),
@@ -243,7 +330,9 @@ class Scene:
 
     def describe(self) -> str:
         parts = ", ".join(b.describe() for b in self.bodies)
-        return f"{self.name}: {len(self.bodies)} bodies in a circle R={mpmath.nstr(self.track.radius, 6)} ({parts}); law {self.law.name} k={mpmath.nstr(self.law.restitution, 6)}"
+        turning = f", plane turning at Omega={mpmath.nstr(self.frame.omega, 6)} rad/s" if self.frame.rotating else ""
+        return (f"{self.name}: {len(self.bodies)} bodies on {self.track.describe()}{turning} ({parts}); "
+                f"law {self.law.name} k={mpmath.nstr(self.law.restitution, 6)}")
 
 
 def _finite(value, field):

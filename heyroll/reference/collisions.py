@@ -50,8 +50,8 @@ from .pendulum import GUARD_DPS, ExactPendulum
 
 #: Columns of :func:`reference_table`, a subset of the engine's collision table.
 REFERENCE_COLUMNS = (
-    "n", "t", "i", "j", "phi_i", "phi_j",
-    "dphi_i_before", "dphi_j_before", "dphi_i_after", "dphi_j_after",
+    "n", "t", "i", "j", "q_i", "q_j",
+    "dq_i_before", "dq_j_before", "dq_i_after", "dq_j_after",
 )
 
 #: Safety cap on the safe steps spent looking for one root of one gap.
@@ -65,12 +65,12 @@ class ReferenceCollision:
     t: mpmath.mpf
     i: int
     j: int
-    phi_i: mpmath.mpf
-    phi_j: mpmath.mpf
-    dphi_i_before: mpmath.mpf
-    dphi_j_before: mpmath.mpf
-    dphi_i_after: mpmath.mpf
-    dphi_j_after: mpmath.mpf
+    q_i: mpmath.mpf
+    q_j: mpmath.mpf
+    dq_i_before: mpmath.mpf
+    dq_j_before: mpmath.mpf
+    dq_i_after: mpmath.mpf
+    dq_j_after: mpmath.mpf
 
 
 @dataclass
@@ -248,9 +248,9 @@ def run_reference(
             with mpmath.workdps(dps):
                 run.collisions.append(
                     ReferenceCollision(
-                        t=+t, i=i + 1, j=j + 1, phi_i=+phi_i, phi_j=+phi_j,
-                        dphi_i_before=+dphi_i, dphi_j_before=+dphi_j,
-                        dphi_i_after=+out_i, dphi_j_after=+out_j,
+                        t=+t, i=i + 1, j=j + 1, q_i=+phi_i, q_j=+phi_j,
+                        dq_i_before=+dphi_i, dq_j_before=+dphi_j,
+                        dq_i_after=+out_i, dq_j_after=+out_j,
                     )
                 )
             opening, tiny = out_j - out_i, mpmath.mpf(10) ** (-(dps // 2)) * abs(dphi_i - dphi_j)
@@ -314,7 +314,7 @@ def compare_with_engine(engine_table: np.ndarray, collisions, columns=None) -> d
     (absolute error, rad or rad/s) and ``<name>_rel`` (relative to the
     column's scale: max |reference value| over the rows compared).
     """
-    columns = columns or ("phi_i", "phi_j", "dphi_i_before", "dphi_j_before", "dphi_i_after", "dphi_j_after")
+    columns = columns or ("q_i", "q_j", "dq_i_before", "dq_j_before", "dq_i_after", "dq_j_after")
     n = min(len(engine_table), len(collisions))
     out = {
         "same_pair": np.array(

@@ -10,6 +10,7 @@ leaving heyoka.
 
 from __future__ import annotations
 
+import dataclasses
 import gc
 import math
 import time
@@ -25,8 +26,10 @@ from ..model.scene import Scene
 from .events import CollisionLog, StopRequest, mode_events, mode_handlers
 from .precision import DOUBLE, Precision
 from .result import SimulationResult, Status
+from .contact_function import BODY_VALUES, body_function, evaluate
 from .system import (
-    SceneSystem, Unit, build_system, cluster_unit, gap_value, overlap_tolerance, singleton_units, unit_acceleration,
+    SceneSystem, Unit, build_system, cluster_unit, gap_value, overlap_tolerance, piece_of, singleton_units,
+    unit_acceleration,
 )
 
 #: A gap below -overlap_tolerance (system.py) means a collision was missed:
@@ -61,31 +64,81 @@ class ModeChange:
     state: tuple
 
 
+class OptionsError(ValueError):
+    """A run option breaks a rule (``field``: the option's name)."""
+
+    def __init__(self, field: str, rule: str):
+        self.field, self.rule = field, rule
+        super().__init__(f"{field}: {rule}")
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How to run a scene; every field defaults to the scene's own setting or the engine's default.
+
+    ``t_end`` and ``max_collisions`` override the scene's [run] table (pass
+    ``max_collisions=None`` for no limit, ``...`` for the scene's);
+    ``precision`` is ``double | long | quad | mp:BITS`` (every event, law map
+    and fallback is evaluated in that type); ``tolerance`` defaults to the
+    precision's epsilon; ``high_accuracy`` turns on heyoka's compensated
+    summation (measured on the default scene: no change of the collision
+    times over tens of collisions nor of the energy error over 1e6
+    collisions, a few per cent of cost, validation/long_runs.py);
+    ``watch_all_contacts`` also watches pairs the scene's energy cannot
+    bring together; ``chunk_size`` collisions are handed to a sink at a
+    time; ``dense`` keeps heyoka's continuous output of the whole run
+    (``SimulationResult.dense``, for figures; memory grows with the run).
+    """
+
+    t_end: object = None
+    max_collisions: object = ...
+    precision: object = "double"
+    tolerance: object = None
+    high_accuracy: bool = False
+    watch_all_contacts: bool = False
+    chunk_size: int = 65536
+    dense: bool = False
+
+    def __post_init__(self):
+        if self.t_end is not None:
+            try:
+                t_end = float(self.t_end)
+            except (TypeError, ValueError):
+                raise OptionsError("t_end", f"must be a number, got {self.t_end!r}") from None
+            if not math.isfinite(t_end) or t_end < 0:
+                raise OptionsError("t_end", f"must be a finite number >= 0, got {self.t_end!r}")
+        limit = self.max_collisions
+        if limit is not ... and limit is not None:
+            if isinstance(limit, bool) or not isinstance(limit, (int, np.integer)) or limit < 0:
+                raise OptionsError("max_collisions", f"must be a whole number >= 0 or None, got {limit!r}")
+        if self.tolerance is not None:
+            try:
+                tol = float(self.tolerance)
+            except (TypeError, ValueError):
+                raise OptionsError("tolerance", f"must be a number, got {self.tolerance!r}") from None
+            if not math.isfinite(tol) or tol <= 0:
+                raise OptionsError("tolerance", f"must be a finite number > 0, got {self.tolerance!r}")
+        if isinstance(self.precision, str):
+            object.__setattr__(self, "precision", Precision.parse(self.precision))
+        if isinstance(self.chunk_size, bool) or not isinstance(self.chunk_size, int) or self.chunk_size < 1:
+            raise OptionsError("chunk_size", f"must be a whole number >= 1, got {self.chunk_size!r}")
+
+
 def simulate(
     scene: Scene,
+    options: RunOptions | None = None,
     *,
-    t_end=None,
-    max_collisions: int | None = ...,
-    precision: Precision | str = DOUBLE,
-    tolerance=None,
-    high_accuracy: bool = False,
-    watch_all_contacts: bool = False,
     sink: CollisionSink | None = None,
-    chunk_size: int = 65536,
     progress=None,
+    **fields,
 ) -> SimulationResult:
-    """Integrate ``scene`` and apply its collision law at every contact.
+    """Integrate ``scene`` on its track and apply its collision law at every contact.
 
     Collision instants are the roots of the gap functions, located by
-    heyoka's event detection to the precision of the run. ``t_end`` and
-    ``max_collisions`` override the scene's run settings (pass
-    ``max_collisions=None`` for no limit). ``tolerance`` defaults to the
-    precision's epsilon. ``watch_all_contacts`` also watches pairs whose
-    contact the scene's energy cannot reach. ``high_accuracy`` turns on
-    heyoka's compensated summation; measured on the default scene it changes
-    neither the collision times over tens of collisions nor the energy error
-    over 1e6 collisions (which comes from storing the state in double once per
-    step), at a few per cent of cost (validation/long_runs.py).
+    heyoka's event detection to the precision of the run; collisions,
+    junction passages and limiter impacts are resolved inside heyoka's event
+    callbacks. ``options`` is a :class:`RunOptions`; keyword ``fields``
+    replace single options (``simulate(scene, t_end=5.0, precision="quad")``).
 
     Long runs: with a ``sink`` (see :class:`CollisionSink`) the records are
     handed on every ``chunk_size`` collisions and only the first chunk stays
@@ -93,8 +146,20 @@ def simulate(
     ``progress(t, collisions)``, if given, is called about every 0.2 s of
     wall time (checked once per 1024 collisions) and at the end.
     """
+    options = options or RunOptions()
+    if fields:
+        unknown = set(fields) - set(RunOptions.__dataclass_fields__)
+        if unknown:
+            raise TypeError(f"simulate() got unknown options {sorted(unknown)}")
+        options = dataclasses.replace(options, **fields)
+    return _simulate(scene, options, sink, progress)
+
+
+def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResult:
+    t_end, max_collisions, precision = opts.t_end, opts.max_collisions, opts.precision
+    tolerance, high_accuracy, watch_all_contacts = opts.tolerance, opts.high_accuracy, opts.watch_all_contacts
+    chunk_size = opts.chunk_size
     started = time.perf_counter()
-    precision = Precision.parse(precision) if isinstance(precision, str) else precision
     t_end = scene.run.t_end if t_end is None else t_end
     limit = scene.run.max_collisions if max_collisions is ... else max_collisions
     if limit is not None and limit < 0:
@@ -103,7 +168,7 @@ def simulate(
     options = dict(precision.integrator_options(), high_accuracy=high_accuracy)
     if tolerance is not None:
         options["tol"] = precision.number(tolerance)
-    time_scale = 1 / math.sqrt(max(float(scene.track.angular_stiffness(b, scene.g)) for b in scene.bodies))
+    time_scale = motion_time_scale(scene)
 
     log = CollisionLog(max_collisions=limit)
     stream = _Stream(log, sink, progress, len(scene.bodies))
@@ -119,9 +184,13 @@ def simulate(
     initial_state = np.array(full_state)
     units = singleton_units(len(scene.bodies))
     first_system = build_system(scene, precision, pairs=pairs, units=units)
-    units, full_state = _initial_contacts(scene, precision, pairs, units, full_state, first_system)
+    if scene.track.linear_gap:
+        units, full_state = _initial_contacts(scene, precision, pairs, units, full_state, first_system)
     if any(u.is_cluster for u in units):
         first_system = build_system(scene, precision, pairs=pairs, units=units)
+    # The piece of track each body is on (open tracks), as the junction callbacks switch it.
+    pieces = [piece_of(scene.track, b, q) for b, q in zip(scene.bodies, scene.q)]
+    dense = [] if opts.dense else None
     modes = [ModeChange(0.0, _clusters(units), tuple(full_state))]
     t = (num(0), num(0))  # double-length time (hi, lo), kept across modes
     steps, outcome, first = 0, None, True
@@ -133,7 +202,7 @@ def simulate(
 
     if limit == 0:
         log.stop.reason, log.stop.message = "max_collisions", "max_collisions = 0: nothing integrated"
-    start_limit = _track_limit_at_start(scene, full_state)
+    start_limit = _track_limit_at_start(scene, first_system, full_state)
     if start_limit:
         log.stop.reason, log.stop.message = start_limit
     split_pair = None  # scene pair index of a contact that has just split
@@ -141,16 +210,18 @@ def simulate(
     while limit != 0 and not start_limit:
         system = first_system if first else build_system(scene, precision, pairs=pairs, units=units)
         first = False
-        holder: list = [None]
-        handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale)
+        holder: list = [None, None]
+        handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale, pieces)
         ta, slots, nt_slots = _integrator(system, options, precision.number(precision.epsilon * time_scale))
         slots[:], nt_slots[:] = handlers, warnings
-        ta.pars[:] = system.parameters
+        ta.pars[:] = system.parameters[: len(ta.pars)]  # heyoka keeps those up to the last one used
         ta.state[:] = system.reduce(full_state)
         ta.dtime = t
         if slots:
             ta.reset_cooldowns()
-        holder[0] = ta.state
+        # The full parameter vector (compiled contact functions may read some that the
+        # integrator does not keep); the junction callbacks update it and the integrator's.
+        holder[0], holder[1] = ta.state, np.array(system.parameters)
         stream.ta = ta
         _reset(log.stop)
         # Pairs touching as the mode starts (bodies that start so, the rest of a
@@ -165,7 +236,7 @@ def simulate(
             if overlap:
                 log.stop.reason, log.stop.message = "overlap", overlap
             else:
-                outcome, n_steps = _propagate(ta, log, precision.number(t_end))
+                outcome, n_steps = _propagate(ta, log, precision.number(t_end), dense)
                 steps += n_steps
         full_state = system.expand(ta.state.tolist())
         t = ta.dtime
@@ -183,6 +254,15 @@ def simulate(
                     f"({same_instant} mode changes at one instant); stopped"
                 )
                 break
+        if reason == "merge" and not system.linear_gap:
+            contact = system.contacts[log.stop.data["contact"]]
+            log.stop.reason = "contact"
+            log.stop.message = (
+                f"bodies {contact.pair.i + 1} and {contact.pair.j + 1} stay pressed together at t = {float(t[0]):.17g} s "
+                "(their remaining bounces are below the run's resolution): persistent contact on this track "
+                "is not modelled yet"
+            )
+            break
         if reason == "merge":
             contact = system.contacts[log.stop.data["contact"]]
             units, full_state = _merge(scene, system, units, contact, full_state)
@@ -248,6 +328,8 @@ def simulate(
             "track_sides": scene.track_sides,
             "warnings": [log.warnings[k] for k in sorted(log.warnings)],
         },
+        passages=tuple(log.passages),
+        dense=tuple(dense) if dense is not None else None,
         total_collisions=total,
         table_file=getattr(sink, "path", None) if sink is not None else None,
         contact_intervals=tuple(intervals),
@@ -260,7 +342,7 @@ def simulate(
 STEP_CHUNK = 1 << 16
 
 
-def _propagate(ta, log, t_end):
+def _propagate(ta, log, t_end, dense=None):
     """propagate_until with the cyclic GC off and Ctrl-C turned into a clean stop.
 
     In chunks of STEP_CHUNK steps: a chunk that leaves the time where it was
@@ -275,7 +357,13 @@ def _propagate(ta, log, t_end):
     try:
         while True:
             before = ta.dtime
-            result = ta.propagate_until(t_end, max_steps=STEP_CHUNK)
+            t0 = ta.time
+            if dense is None:
+                result = ta.propagate_until(t_end, max_steps=STEP_CHUNK)
+            else:
+                result = ta.propagate_until(t_end, max_steps=STEP_CHUNK, c_output=True)
+                if result[4] is not None:
+                    dense.append((float(t0), float(ta.time), result[4]))
             steps += int(result[3])
             if result[0] != hy.taylor_outcome.step_limit:
                 return result[0], steps
@@ -374,24 +462,36 @@ def _initial_contacts(scene, precision, pairs, units, full_state, system=None):
     return units, full_state
 
 
-def _track_limit_at_start(scene: Scene, state) -> tuple[str, str] | None:
+def motion_time_scale(scene: Scene) -> float:
+    """The motion's time scale (s): 1/sqrt of the stiffest body's g/(kappa rho) on a circle,
+    sqrt(L/g) on an open track of length L (the longest body's range)."""
+    track = scene.track
+    if track.linear_gap:
+        return 1 / math.sqrt(max(float(track.angular_stiffness(b, scene.g)) for b in scene.bodies))
+    length = max(float(hi - lo) for lo, hi in (track.domain(b) for b in scene.bodies))
+    return math.sqrt(max(length, 1e-300) / float(scene.g))
+
+
+def _track_limit_at_start(scene: Scene, system: SceneSystem, state) -> tuple[str, str] | None:
     """A body that starts where the track cannot hold it (one-sided, N < 0) or where it slips.
 
     Events only see later crossings, so the start is checked here, with the
-    same forces as the events (see system._track_events).
+    same forces as the events (see system._track_events), in the run's type.
     """
     n = len(scene.bodies)
-    g = float(scene.g)
+    function = body_function(system)
+    if function is None:
+        return None
+    values = evaluate(function, system.reduce(list(state)), system.parameters).tolist()
     mu = None if scene.track_friction is None else float(scene.track_friction)
+    c = scene.coordinate
     for k, body in enumerate(scene.bodies):
-        phi, dphi = float(state[k]), float(state[n + k])
-        rho = float(scene.track.path_radius(body))
-        normal = rho * dphi * dphi + g * math.cos(phi)
-        where = f"at phi = {phi:.17g} rad, dphi = {dphi:.17g} rad/s, t = 0 s"
+        normal, driving = (float(x) for x in values[BODY_VALUES * k + 2: BODY_VALUES * k + 5: 2])
+        where = f"at {c} = {float(state[k]):.17g}, d{c} = {float(state[n + k]):.17g}, t = 0 s"
         if scene.track_sides == "one" and normal < 0:
-            return "left_track", f"body {k + 1} cannot stay on the one-sided track: N = m (rho phi'^2 + g cos phi) < 0 {where}"
+            return "left_track", f"body {k + 1} cannot stay on the one-sided track: its normal force N < 0 {where}"
         if mu is not None and body.kappa > 1:
-            friction = g * math.sin(phi) * (1 - 1 / float(body.kappa))
+            friction = driving * (1 - 1 / float(body.kappa))
             if abs(friction) > mu * normal:
                 return "slip", f"body {k + 1} slips from the start: the friction needed to roll exceeds mu N {where}"
     return None
@@ -470,6 +570,8 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
         return Status.INTERRUPTED, log.stop.message
     if reason in ("left_track", "slip"):
         return Status(reason), log.stop.message
+    if reason in ("contact", "rest"):
+        return Status.CONTACT, log.stop.message
     if reason == "overlap":
         return Status.OVERLAP, log.stop.message
     if reason == "failed":
@@ -481,10 +583,23 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
 
 def _overlap(scene: Scene, precision: Precision, state, where: str) -> str:
     """A message if a pair's gap is below -overlap_tolerance in ``state`` (a full state), else ''."""
+    n = len(scene.bodies)
     for p in scene.pairs:
-        gap = float(state[p.j]) - float(state[p.i]) + float(p.gap_constant())
+        if scene.track.linear_gap:
+            gap = float(state[p.j]) - float(state[p.i]) + float(p.gap_constant())
+            unit = "rad"
+        else:
+            gap = float(scene.gap(p.i, p.j, float(state[p.i]), float(state[p.j])))
+            unit = "m"
         if gap < -overlap_tolerance(state[p.j]):
-            return f"bodies {p.i + 1} and {p.j + 1} overlap {where} (gap {gap:.3g} rad): a collision was missed"
+            return f"bodies {p.i + 1} and {p.j + 1} overlap {where} (gap {gap:.3g} {unit}): a collision was missed"
+    for k in range(n):
+        domain = scene.domain(k)
+        if domain is not None:
+            q = float(state[k])
+            if q < domain[0] - overlap_tolerance(q) or q > domain[1] + overlap_tolerance(q):
+                return (f"body {k + 1} is beyond the end of the track {where} ({scene.coordinate} = {q:.17g}): "
+                        "a limiter impact was missed")
     return ""
 
 
@@ -503,7 +618,7 @@ def _integrator(system: SceneSystem, options: dict, cooldown):
         nt_slots: list = []
         events, nt_events = mode_events(system, cooldown, slots, nt_slots)
         ta = hy.taylor_adaptive(
-            system.equations, system.initial_state, pars=system.parameters, t_events=events,
+            system.equations, system.initial_state, t_events=events,
             nt_events=nt_events, **options,
         )
         entry = (ta, slots, nt_slots)

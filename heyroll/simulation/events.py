@@ -77,6 +77,9 @@ class CollisionLog:
     fallbacks: int = 0
     #: First time each body's normal force changed sign on a two-sided track.
     warnings: dict = field(default_factory=dict)
+    #: Junction passages and limiter impacts: (t, body, kind, piece from, piece to, q, q' before, q' after),
+    #: kind an index into resolve.bounds.PASSAGE_KINDS (0-based bodies and pieces).
+    passages: list = field(default_factory=list)
 
     @property
     def count(self) -> int:
@@ -84,16 +87,19 @@ class CollisionLog:
 
 
 def mode_handlers(
-    scene, system: SceneSystem, log: CollisionLog, holder: list, time_scale: float
+    scene, system: SceneSystem, log: CollisionLog, holder: list, time_scale: float, pieces=None
 ) -> tuple[list, list, object]:
     """The callbacks of one contact mode, in the order of :func:`mode_events`.
 
     Returns (terminal handlers, non-terminal handlers, settle), ``settle``
     the mode's :func:`contact_settler` (the driver calls it at the start of
-    the mode). ``holder[0]`` must be set to the integrator's state array (a
-    view into heyoka's buffer) before integrating; the handlers use it to
-    avoid re-wrapping the buffer at every collision.
+    the mode). ``holder[0]`` must be set to the integrator's state array and
+    ``holder[1]`` to its parameters (views into heyoka's buffers) before
+    integrating; the handlers use them to avoid re-wrapping the buffers at
+    every collision. ``pieces`` (open tracks): the piece each body is on.
     """
+    if not system.linear_gap:
+        return _local_handlers(scene, system, log, holder, time_scale, pieces)
     fast = not any(u.is_cluster for u in system.units)
     handlers: list = []
     resolvers: list = []
@@ -108,11 +114,40 @@ def mode_handlers(
             handler = _make_unit_callback(scene, system, number, log, holder, time_scale, settle)
             resolvers.append(handler.resolve)
         handlers.append(handler)
+    return _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, settle)
+
+
+def _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, settle):
+    """Everything after the collisions, in the order of :func:`mode_events`."""
     handlers += [_stopper(log, "split", {"link": number}) for number in range(len(system.links))]
+    if system.bound_events:
+        from .contact_function import body_function
+        from .resolve.bounds import make_bound_callback
+
+        function = body_function(system)
+        handlers += [make_bound_callback(scene, system, ev, log, holder, pieces, time_scale, function)
+                     for ev in system.bound_events]
     handlers += [_track_stopper(log, ev, holder, system) for ev in system.track_events if ev.terminal]
     handlers += [_overlap_stopper(log, number, holder, system) for number in range(len(system.contacts))]
     warnings = [_track_warning(log, ev, system) for ev in system.track_events if not ev.terminal]
     return handlers, warnings, settle
+
+
+def _local_handlers(scene, system, log, holder, time_scale, pieces):
+    """Collisions where the gap is not linear (arc chains, curves): resolve.local_map."""
+    from .contact_function import contact_function
+    from .resolve.local_map import local_settler, make_local_callback
+
+    function = contact_function(system)
+    resolvers: list = []
+    settle = local_settler(scene, system, resolvers, log, holder, time_scale, function)
+    cascade = settle if system.n_units > 2 else None
+    handlers = []
+    for number in range(len(system.contacts)):
+        handler = make_local_callback(scene, system, number, log, holder, time_scale, function, cascade)
+        resolvers.append(handler.resolve)
+        handlers.append(handler)
+    return _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, settle)
 
 
 def stop_at_max_collisions(stop: StopRequest, limit: int) -> bool:
@@ -150,11 +185,23 @@ def mode_events(system: SceneSystem, cooldown, slots: list, nt_slots: list) -> t
         hy.t_event(gap, callback=forward(n), direction=negative, cooldown=cooldown, **options)
         for n, gap in enumerate(system.gap_expressions)
     ]
-    expressions = list(system.link_expressions)
-    expressions += [x for x, ev in zip(system.track_expressions, system.track_events) if ev.terminal]
-    expressions += list(system.guard_expressions)
+    n_gaps = len(system.gap_expressions)
     events += [
-        hy.t_event(x, callback=forward(len(system.gap_expressions) + n), direction=negative, **options)
+        hy.t_event(x, callback=forward(n_gaps + n), direction=negative, **options)
+        for n, x in enumerate(system.link_expressions)
+    ]
+    # Piece ends: the body keeps going (a junction) or rebounds (a limiter) inside the callback;
+    # the cooldown as for collisions (impacts on a stop can accumulate too).
+    n_before = n_gaps + len(system.link_expressions)
+    events += [
+        hy.t_event(x, callback=forward(n_before + n), direction=negative, cooldown=cooldown, **options)
+        for n, x in enumerate(system.bound_expressions)
+    ]
+    expressions = [x for x, ev in zip(system.track_expressions, system.track_events) if ev.terminal]
+    expressions += list(system.guard_expressions)
+    n_before += len(system.bound_expressions)
+    events += [
+        hy.t_event(x, callback=forward(n_before + n), direction=negative, **options)
         for n, x in enumerate(expressions)
     ]
     nt_expressions = [x for x, ev in zip(system.track_expressions, system.track_events) if not ev.terminal]
@@ -175,7 +222,7 @@ def _track_warning(log, ev, system):
             full = system.expand(ta.update_d_output(t).tolist())
             log.warnings[body] = (
                 f"body {body + 1}: the normal force of the track changes sign at t = {float(t):.17g} s, "
-                f"phi = {float(full[body]):.6g} rad (on a one-sided track it would leave it here)"
+                f"{system.coordinate} = {float(full[body]):.6g} (on a one-sided track it would leave it here)"
             )
 
     return record
@@ -191,16 +238,17 @@ def _stopper(log, reason, data):
 
 def _track_stopper(log, event, holder, system):
     what = {
-        "left_track": "leaves the track: the normal force N = m (rho phi'^2 + g cos phi) reaches 0",
-        "slip": "starts to slip: the friction needed to roll, m g sin phi (1 - 1/kappa), exceeds mu N",
+        "left_track": "would leave the track: its normal force N (on a circle m (rho phi'^2 + g cos phi)) reaches 0",
+        "slip": "starts to slip: the friction needed to roll, (1 - 1/kappa) times the driving force, exceeds mu N",
     }[event.kind]
 
     def stop(ta, d_sgn):
         full = system.expand(holder[0].tolist())
+        c = system.coordinate
         log.stop.reason = event.kind
         log.stop.message = (
-            f"body {event.body + 1} {what}, at phi = {float(full[event.body]):.17g} rad, "
-            f"dphi = {float(full[system.n_bodies + event.body]):.17g} rad/s, t = {float(ta.time):.17g} s"
+            f"body {event.body + 1} {what}, at {c} = {float(full[event.body]):.17g}, "
+            f"d{c} = {float(full[system.n_bodies + event.body]):.17g}, t = {float(ta.time):.17g} s"
         )
         return False
 
@@ -247,6 +295,21 @@ def below_resolution(opening, gap_acceleration, restitution, t, scale, time_scal
     duration = _first_return(v, a, J)  # the bounce's: g(duration) = 0
     if duration is None:
         return False
+    if J > 0:
+        # The gap opens for good after the last root of g(t)/t. Where a ~ 0 (all
+        # units near the bottom, where every gap acceleration vanishes) the sign
+        # of a is the rounding of the positions (a pair opened by OPEN_ULPS, a
+        # collision root ~1e-20 rad off): "pressed" for 3|a|/J, by ~|a|^3/J^2,
+        # then opening as J t^3/6. A dip that shallow or short is no contact:
+        # merging it made the link split at once and the settler merge it
+        # again, for ever at one instant (measured: a solid sphere and two
+        # particles, k = 0, colliding at phi = 0).
+        last = _positive_roots(J / 6, a / 2, v)[-1:]
+        if last:
+            g = lambda s: v * s + a * s * s / 2 + J * s * s * s / 6  # noqa: E731
+            depth = -min([0.0] + [g(s) for s in _positive_roots(J / 2, a, v) if s < last[0]])
+            if depth <= RESOLUTION_ULPS * eps * scale or last[0] <= RESOLUTION_ULPS * eps * (abs(t) + time_scale):
+                return False
     height = _bounce_height(v, a, J, duration)
     remaining = duration / (1 - restitution) if restitution < 1 else math.inf
     return height <= RESOLUTION_ULPS * eps * scale or remaining <= RESOLUTION_ULPS * eps * (abs(t) + time_scale)
@@ -283,7 +346,7 @@ def _positive_roots(c2, c1, c0) -> list:
 def fallback_map(scene, pair) -> ImpulseMap:
     """Newton's law on the gap rate with generalized masses, for one pair."""
     law = GeneralizedNewtonLaw(restitution=scene.law.restitution)
-    return impulse_map(law, scene.track, scene.bodies[pair.i], scene.bodies[pair.j])
+    return impulse_map(law, scene.bodies[pair.i], scene.bodies[pair.j], scene.sigma(pair.i), scene.sigma(pair.j))
 
 
 def unit_map(system: SceneSystem, a: int, b: int, restitution) -> ImpulseMap:
@@ -492,7 +555,8 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
       touching) re-closes within that first step, and would pass through
       unseen; a gap a few ulps open is seen to close. The move is below the
       run's resolution (the gap's own rounding); the unit with the roomier
-      other side moves. ``skip_open``: the contact whose event just fired
+      other side moves (in a row of touching units: it and the units that
+      crowd it, as one block). ``skip_open``: the contact whose event just fired
       (heyoka's cooldown covers it).
 
     False: the run stops (``log.stop`` says why).
@@ -524,6 +588,26 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
         other = right_of.get(moving) if moving == geometry[number][1] else left_of.get(moving)
         return math.inf if other is None or other == number else gap(s, other)
 
+    def push_block(s, number, delta, target):
+        """Move unit b of the contact and the units crowding it on its far side by +delta
+        (else unit a and those on its side by -delta); the unit moved, or None."""
+        a, b, _ = geometry[number]
+        for moving, step, beyond in ((b, delta, right_of), (a, -delta, left_of)):
+            block = [moving]
+            while True:
+                other = beyond.get(block[-1])
+                if other is None or other == number or gap(s, other) - delta >= target:
+                    break
+                block.append(geometry[other][1] if step > 0 else geometry[other][0])
+                if block[-1] in (a, b) or len(block) > nu:
+                    block = None
+                    break
+            if block is not None:
+                for u in block:
+                    s[u] = s[u] + step
+                return moving
+        return None
+
     def open_gap(s, number, scale):
         """Open a touching gap to 2 OPEN_ULPS ulps; the unit moved, or None if no unit has room."""
         a, b, _ = geometry[number]
@@ -537,7 +621,15 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                 s[a] = s[a] - delta
                 moved = a
             else:
-                return None
+                # A row of touching units (four bodies starting in one point,
+                # beta = 0): the neighbours' gaps are 0 or just opened, so no
+                # single unit has room and this gap stayed 0.0, unseen by
+                # heyoka when it closed again (measured: status overlap).
+                # Move the unit with the units that crowd it, as one block
+                # (their gaps unchanged), if there is room past the block.
+                moved = push_block(s, number, delta, target)
+                if moved is None:
+                    return None
             if gap(s, number) > target:
                 return moved
         return moved

@@ -1,4 +1,4 @@
-"""Working precision of a run: double, quad (real128) or MPFR (mp:BITS).
+"""Working precision of a run: double, long (x87 extended), quad (real128) or MPFR (mp:BITS).
 
 Model constants are mpmath numbers at 256 bits; a precision rounds each of
 them once, through its decimal text at more digits than the target carries.
@@ -11,13 +11,18 @@ from dataclasses import dataclass
 
 import heyoka as hy
 import mpmath
+import numpy as np
 
 from ..errors import SceneError
 
 
 @dataclass(frozen=True)
 class Precision:
-    """A floating-point type for heyoka: ``double``, ``quad`` or ``mp:BITS``."""
+    """A floating-point type for heyoka: ``double``, ``long``, ``quad`` or ``mp:BITS``.
+
+    ``long`` is numpy's longdouble where it is wider than a double (x87
+    extended, 64-bit mantissa, on x86); elsewhere it is refused.
+    """
 
     name: str
     bits: int
@@ -27,6 +32,10 @@ class Precision:
         text = str(text).strip().lower()
         if text in ("double", "float64", "dbl"):
             return cls("double", 53)
+        if text in ("long", "longdouble", "extended"):
+            if np.finfo(np.longdouble).nmant <= 52:
+                raise SceneError(field, "long precision needs a longdouble wider than a double (x86's x87 extended)")
+            return cls("long", np.finfo(np.longdouble).nmant + 1)
         if text in ("quad", "real128", "f128"):
             if not hasattr(hy, "real128"):
                 raise SceneError(field, "quad precision needs a heyoka build with real128")
@@ -41,12 +50,14 @@ class Precision:
             if not hasattr(hy, "real"):
                 raise SceneError(field, "MPFR precision needs a heyoka build with real")
             return cls(f"mp:{bits}", bits)
-        raise SceneError(field, f"unknown precision {text!r}; expected double | quad | mp:BITS")
+        raise SceneError(field, f"unknown precision {text!r}; expected double | long | quad | mp:BITS")
 
     @property
     def fp_type(self):
         if self.name == "double":
             return float
+        if self.name == "long":
+            return np.longdouble
         if self.name == "quad":
             return hy.real128
         return hy.real
@@ -58,7 +69,7 @@ class Precision:
     @property
     def digits(self) -> int:
         """Significant decimal digits that round-trip a number of this type."""
-        return math.ceil(self.bits * math.log10(2)) + 1  # 17 for double, 36 for quad
+        return math.ceil(self.bits * math.log10(2)) + 1  # 17 for double, 21 for long, 36 for quad
 
     def number(self, value):
         """Round an mpmath (or Python) number once to this precision."""
@@ -68,6 +79,8 @@ class Precision:
         # global 53 bits before the text is made.
         with mpmath.workprec(max(256, 2 * self.bits)):
             text = mpmath.nstr(mpmath.mpf(value), self.digits + 10, strip_zeros=False, min_fixed=1, max_fixed=0)
+        if self.name == "long":
+            return np.longdouble(text)
         if self.name == "quad":
             return hy.real128(text)
         return hy.real(text, self.bits)
@@ -79,6 +92,8 @@ class Precision:
         """Text with enough significant digits to read back to the same number."""
         if self.name == "double":
             return f"{float(value):.17g}"
+        if self.name == "long":
+            return np.format_float_scientific(np.longdouble(value), precision=self.digits - 1, unique=False)
         with mpmath.workprec(self.bits + 16):
             return mpmath.nstr(mpmath.mpf(str(value)), self.digits, strip_zeros=False)
 

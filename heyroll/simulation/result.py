@@ -9,12 +9,15 @@ import numpy as np
 
 from ..model.laws import collision_impulse, kinetic_energy_change
 from ..model.scene import ContactPair, Scene
-from ..model.tracks import mechanical_energy
+from ..model.tracks import first_integral, mechanical_energy
 from .precision import Precision
 
 
 class Status(str, Enum):
-    """How a run ended. ``completed`` and ``max_collisions`` are successes."""
+    """How a run ended. ``completed`` and ``max_collisions`` are successes.
+
+    Each member carries its meaning (``meaning``) and the CLI's exit code (``exit_code``).
+    """
 
     COMPLETED = "completed"
     MAX_COLLISIONS = "max_collisions"
@@ -30,15 +33,39 @@ class Status(str, Enum):
     def success(self) -> bool:
         return self in (Status.COMPLETED, Status.MAX_COLLISIONS)
 
+    @property
+    def meaning(self) -> str:
+        return _MEANINGS[self]
+
+    @property
+    def exit_code(self) -> int:
+        return 0 if self.success else 130 if self is Status.INTERRUPTED else 1
+
+
+_MEANINGS = {
+    Status.COMPLETED: "reached t_end",
+    Status.MAX_COLLISIONS: "stopped after the scene's or the run's max_collisions",
+    Status.CONTACT: "bodies stay pressed together (or on a limiter) where persistent contact is not modelled yet",
+    Status.INCONSISTENT: "the law's outcome would leave two bodies approaching (on_inconsistent = 'error')",
+    Status.INTERRUPTED: "stopped by Ctrl-C or SIGTERM; the table holds every collision before the stop",
+    Status.LEFT_TRACK: "a body would leave a one-sided track (its normal force reached 0)",
+    Status.SLIP: "the friction needed to roll exceeded mu N",
+    Status.OVERLAP: "a collision was missed (a gap went below the overlap tolerance)",
+    Status.FAILED: "the integrator could not go on",
+}
+
 
 #: Columns of the collision table, in order (see README, "Outputs").
 TABLE_COLUMNS = (
-    "n", "t", "i", "j", "phi_i", "phi_j",
+    "n", "t", "i", "j", "q_i", "q_j",
     "omega_i_before", "omega_j_before", "omega_i_after", "omega_j_after",
     "energy_before", "energy_after",
-    "dphi_i_before", "dphi_j_before", "dphi_i_after", "dphi_j_after",
+    "dq_i_before", "dq_j_before", "dq_i_after", "dq_j_after",
     "law_impulse", "law_energy_change", "law_flag",
 )
+
+#: Columns of the passages table (junction passages and limiter impacts, see README).
+PASSAGE_COLUMNS = ("n", "t", "body", "kind", "piece_from", "piece_to", "q", "dq_before", "dq_after")
 INTEGER_COLUMNS = ("n", "i", "j", "law_flag")
 
 #: law_flag values: which law resolved the collision.
@@ -48,7 +75,7 @@ LAW_FLAGS = {0: "the scene's law", 1: "fallback: Newton's law on the gap rate (t
 
 @dataclass(frozen=True)
 class BodyConstants:
-    """Per-body numbers for vectorized post-processing, in one number type."""
+    """Per-body numbers for vectorized post-processing on the circle, in one number type."""
 
     generalized_mass: np.ndarray
     weight_moment: np.ndarray
@@ -56,7 +83,7 @@ class BodyConstants:
 
 
 def body_constants(scene: Scene, number=float) -> BodyConstants:
-    """The constants rounded by ``number`` (float, or a Precision's ``number`` for quad/MPFR)."""
+    """The circle's constants rounded by ``number`` (float, or a Precision's ``number`` for long/quad/MPFR)."""
     tr, g = scene.track, scene.g
     nan = number(float("nan"))
     return BodyConstants(
@@ -66,15 +93,48 @@ def body_constants(scene: Scene, number=float) -> BodyConstants:
     )
 
 
-def body_energies(constants: BodyConstants, states: np.ndarray) -> np.ndarray:
-    """Mechanical energy of every body (columns) for each state row (eq. 26).
+def closed_form_energy(scene: Scene) -> bool:
+    """Energies in the run's own type by eq. (26): a fixed circle. Elsewhere the first integral in float64."""
+    return scene.track.linear_gap and not scene.frame.rotating
 
-    Works in the number type of ``states`` and ``constants`` (float64, or
-    heyoka's real128 / real arrays, whose numpy ufuncs keep their precision).
+
+def body_energies(constants, states: np.ndarray, scene: Scene | None = None) -> np.ndarray:
+    """Mechanical energy of every body (columns) for each state row.
+
+    On a fixed circle (``constants`` a :class:`BodyConstants`) eq. (26) in the
+    number type of ``states`` and ``constants`` (float64, or long double /
+    real128 / real arrays, whose numpy ufuncs keep their precision); with
+    ``scene`` on any other track the first integral of eq. (92), float64.
     """
     states = np.atleast_2d(np.asarray(states))
+    if scene is not None and not closed_form_energy(scene):
+        n = len(scene.bodies)
+        q, dq = np.asarray(states[:, :n], dtype=float), np.asarray(states[:, n:], dtype=float)
+        return np.stack([first_integral(scene.track, b, q[:, k], dq[:, k], scene.g, scene.frame)
+                         for k, b in enumerate(scene.bodies)], axis=1)
     n = constants.generalized_mass.size
     return mechanical_energy(constants.generalized_mass, constants.weight_moment, states[:, :n], states[:, n:], np.sin)
+
+
+def state_energies(scene: Scene, states, number=float) -> np.ndarray:
+    """Body energies of state rows on any track (see :func:`body_energies`)."""
+    if closed_form_energy(scene):
+        return body_energies(body_constants(scene, number), states)
+    return body_energies(None, states, scene)
+
+
+def rolling_ratios(scene: Scene, q, number=float) -> np.ndarray:
+    """omega_P / q' = sigma(q)/r per row and body (NaN for particles): (R - r)/r on a circle (eq. 23)."""
+    q = np.atleast_2d(np.asarray(q))
+    out = np.empty(q.shape, dtype=object if number is not float else float)
+    for k, b in enumerate(scene.bodies):
+        if b.is_particle:
+            out[:, k] = number(float("nan"))
+        elif scene.track.constant_metric and scene.track.linear_gap:
+            out[:, k] = number(scene.track.rolling_ratio(b))
+        else:
+            out[:, k] = scene.track.sigma(b, np.asarray(q[:, k], dtype=float)) / float(b.radius)
+    return out
 
 
 def build_collision_table(
@@ -101,35 +161,47 @@ def build_collision_table(
     i = np.array([p.i for p in pairs], dtype=np.int64)[pair_numbers]
     j = np.array([p.j for p in pairs], dtype=np.int64)[pair_numbers]
     rows = np.arange(n)
-    c = body_constants(scene, number)
+    ratio = rolling_ratios(scene, before[:, :nb], number)
     table["n"] = rows + first_number
     table["t"] = as_array(times)
     table["i"], table["j"] = i + 1, j + 1
-    table["phi_i"], table["phi_j"] = before[rows, i], before[rows, j]
+    table["q_i"], table["q_j"] = before[rows, i], before[rows, j]
     for side, idx in (("i", i), ("j", j)):
-        table[f"dphi_{side}_before"] = before[rows, nb + idx]
-        table[f"dphi_{side}_after"] = after[rows, nb + idx]
-        table[f"omega_{side}_before"] = c.rolling_ratio[idx] * before[rows, nb + idx]
-        table[f"omega_{side}_after"] = c.rolling_ratio[idx] * after[rows, nb + idx]
-    table["energy_before"] = body_energies(c, before).sum(axis=1)
-    table["energy_after"] = body_energies(c, after).sum(axis=1)
-    impulse, change = _law_quantities(scene, i, j, before[rows, nb + i], before[rows, nb + j], number)
+        table[f"dq_{side}_before"] = before[rows, nb + idx]
+        table[f"dq_{side}_after"] = after[rows, nb + idx]
+        table[f"omega_{side}_before"] = ratio[rows, idx] * before[rows, nb + idx]
+        table[f"omega_{side}_after"] = ratio[rows, idx] * after[rows, nb + idx]
+    table["energy_before"] = state_energies(scene, before, number).sum(axis=1)
+    table["energy_after"] = state_energies(scene, after, number).sum(axis=1)
+    impulse, change = _law_quantities(scene, i, j, before[rows, i], before[rows, j], before[rows, nb + i],
+                                      before[rows, nb + j], number)
     table["law_impulse"], table["law_energy_change"] = impulse, change
     table["law_flag"] = 0 if flags is None else flags
     return table
 
 
-def _law_quantities(scene: Scene, i, j, dphi_i, dphi_j, number=float):
-    """Moment of the collision impulse (eq. 12) and kinetic-energy change (eq. 15)."""
-    law, tr, bodies = scene.law, scene.track, scene.bodies
+def _law_quantities(scene: Scene, i, j, q_i, q_j, dphi_i, dphi_j, number=float):
+    """Moment of the collision impulse (eq. 12) and kinetic-energy change (eq. 15), in the law's variables
+    at the metric of the contact point."""
+    law, bodies = scene.law, scene.bodies
     k = number(law.restitution)
     impulse = np.empty(i.size, dtype=dphi_i.dtype)
     change = np.empty(i.size, dtype=dphi_i.dtype)
+    constant = scene.track.linear_gap and scene.track.constant_metric
     for pair in {(a, b) for a, b in zip(i.tolist(), j.tolist())}:
         mask = (i == pair[0]) & (j == pair[1])
-        vi, vj = law.variables(tr, bodies[pair[0]]), law.variables(tr, bodies[pair[1]])
-        mi, mj = number(vi.inertia), number(vj.inertia)
-        du = number(vi.scale) * dphi_i[mask] - number(vj.scale) * dphi_j[mask]
+        bi, bj = bodies[pair[0]], bodies[pair[1]]
+        if constant:
+            vi, vj = law.variables(bi, scene.sigma(pair[0])), law.variables(bj, scene.sigma(pair[1]))
+            mi, mj = number(vi.inertia), number(vj.inertia)
+            ci, cj = number(vi.scale), number(vj.scale)
+        else:
+            si = scene.track.sigma(bi, np.asarray(q_i[mask], dtype=float))
+            sj = scene.track.sigma(bj, np.asarray(q_j[mask], dtype=float))
+            vi1, vj1 = law.variables(bi, 1), law.variables(bj, 1)
+            ci, cj = float(vi1.scale) * si**law.scale_power, float(vj1.scale) * sj**law.scale_power
+            mi, mj = float(vi1.inertia) * si**law.inertia_power, float(vj1.inertia) * sj**law.inertia_power
+        du = ci * dphi_i[mask] - cj * dphi_j[mask]
         impulse[mask] = collision_impulse(mi, mj, k, du)
         change[mask] = kinetic_energy_change(mi, mj, k, du)
     return impulse, change
@@ -170,6 +242,10 @@ class SimulationResult:
     contact_intervals: tuple = ()
     #: Mode changes (ModeChange: t, clusters, full state), the first at t = 0.
     mode_changes: tuple = ()
+    #: Junction passages and limiter impacts (see events.CollisionLog.passages and passage_table).
+    passages: tuple = ()
+    #: With RunOptions(dense=True): (t0, t1, heyoka continuous output) per propagation.
+    dense: tuple | None = None
 
     @property
     def success(self) -> bool:
@@ -192,8 +268,47 @@ class SimulationResult:
     def constants(self) -> BodyConstants:
         return body_constants(self.scene)
 
+    def body_energies(self, states) -> np.ndarray:
+        """Each body's energy (columns) in each state row, float64."""
+        return np.asarray(state_energies(self.scene, states), dtype=float)
+
     def energy(self, state) -> float:
-        return float(body_energies(self.constants(), state).sum())
+        return float(self.body_energies(state).sum())
+
+    @property
+    def junctions(self) -> list[dict]:
+        """Junction passages: t, body, from and to piece (from 1), q."""
+        return [{"t": float(t), "body": b + 1, "from": f + 1, "to": to + 1, "q": float(q)}
+                for t, b, kind, f, to, q, _v, _w in self.passages if kind == 0]
+
+    @property
+    def limiter_impacts(self) -> list[dict]:
+        """Limiter impacts: t, body, end (lower | upper), q, v_before, v_after."""
+        return [{"t": float(t), "body": b + 1, "end": "lower" if kind == 1 else "upper", "q": float(q),
+                 "v_before": float(v), "v_after": float(w)}
+                for t, b, kind, _f, _to, q, v, w in self.passages if kind != 0]
+
+    @property
+    def warnings(self) -> list[str]:
+        return list(self.settings.get("warnings", []))
+
+    def passage_table(self) -> np.ndarray:
+        """Junction passages and limiter impacts, columns PASSAGE_COLUMNS (bodies and pieces from 1)."""
+        return passage_table(self.passages)
+
+    def sample(self, n_points: int = 2000):
+        """(t, states) on a uniform grid over the run, from the dense output (run with dense=True)."""
+        if not self.dense:
+            raise ValueError("run with RunOptions(dense=True) to sample the trajectory")
+        t = np.linspace(0.0, float(self.t_final), n_points)
+        out = np.empty((n_points, 2 * self.n_bodies))
+        starts = np.array([d[0] for d in self.dense])
+        idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.dense) - 1)
+        for k, (t0, t1, c_out) in enumerate(self.dense):
+            sel = idx == k
+            if np.any(sel):
+                out[sel] = np.asarray(c_out(np.clip(t[sel], t0, t1)), dtype=float)
+        return t, out
 
     @property
     def energy_initial(self) -> float:
@@ -221,15 +336,22 @@ class SimulationResult:
         """The run in a JSON-ready dictionary (see README, "Outputs")."""
         nb = self.n_bodies
         final = np.asarray(self.final_state, dtype=float)
+        c = self.scene.coordinate
+        kinds = [row[2] for row in self.passages]
         return {
             "status": self.status.value,
             "message": self.message,
             "collisions": self.n_collisions,
+            "limiter_impacts": sum(1 for x in kinds if x != 0),
+            "junction_passages": sum(1 for x in kinds if x == 0),
             "t_final": float(self.t_final),
             "energy_initial": self.energy_initial,
             "energy_final": self.energy_final,
+            "track": self.scene.track.kind,
+            "coordinate": c,
+            "frame": {"omega": float(self.scene.frame.omega), "axis_x": float(self.scene.frame.axis_x)},
             "final_state": [
-                {"body": k + 1, "phi": float(final[k]), "dphi": float(final[nb + k])} for k in range(nb)
+                {"body": k + 1, "q": float(final[k]), "dq": float(final[nb + k])} for k in range(nb)
             ],
             "wall_time_s": self.wall_time_s,
             "steps": self.steps,
@@ -241,3 +363,13 @@ class SimulationResult:
             "contact_intervals": list(self.contact_intervals),
             **self.settings,
         }
+
+
+def passage_table(passages) -> np.ndarray:
+    """Passage records -> structured array (columns PASSAGE_COLUMNS; kind 0 junction, 1/2 lower/upper limiter)."""
+    dtype = [(c, np.int64 if c in ("n", "body", "kind", "piece_from", "piece_to") else np.float64)
+             for c in PASSAGE_COLUMNS]
+    table = np.zeros(len(passages), dtype=dtype)
+    for n, (t, body, kind, p_from, p_to, q, v, v_new) in enumerate(passages):
+        table[n] = (n + 1, float(t), body + 1, kind, p_from + 1, p_to + 1, float(q), float(v), float(v_new))
+    return table

@@ -1,13 +1,17 @@
-"""The heyoka ODE system of a scene in one contact mode: only what it needs.
+"""The heyoka ODE system of a scene in one contact mode, on any track: only what it needs.
 
 Bodies move in *units*: a free body is a unit of one; bodies held in
 persistent contact form a cluster that moves as one unit (one degree of
-freedom less per contact). A unit's coordinate psi is the angle of its first
-(most clockwise) member; member k sits at psi + o_k.
+freedom less per contact). A unit's coordinate psi is the coordinate of its
+first member; member k sits at psi + o_k (rigid clusters: tracks whose gap
+is linear in the coordinates, the circle).
 
 State layout: [psi_1 .. psi_U, dpsi_1 .. dpsi_U]; with no clusters (the usual
-case) that is [phi_1 .. phi_N, dphi_1 .. dphi_N] and each body is a rolling
-pendulum, phi'' = -g/(kappa (R - r)) sin phi (paper eq. 25). A cluster obeys
+case) that is [q_1 .. q_N, dq_1 .. dq_N]. Each free body follows its track's
+equation of motion (:meth:`heyroll.model.tracks.Track.terms`: on a fixed
+circle the rolling pendulum phi'' = -g/(kappa (R - r)) sin phi, eq. 25;
+elsewhere eq. 93 from the Lagrangian in a plane turning at Omega). A cluster
+on the circle obeys
 
     (sum_k G_k) psi'' = -sum_k W_k sin(psi + o_k)
 
@@ -19,16 +23,20 @@ between members m and m+1 (a generalized force, N m) is
 Events: the gap between neighbouring units (collisions), the gap going
 below -overlap_tolerance (a guard: a missed collision, see
 :func:`overlap_tolerance`), lambda_m = 0 (a contact that would pull: the
-cluster splits), and, where the scene's energy
-can get there, the normal force of the track reaching zero (the body leaves
-the track) and the friction needed to roll exceeding mu N (it slips). All
-constants are runtime parameters, so scenes of one shape share compiled code.
+cluster splits), the ends of the piece of track each body is on (a junction
+of an arc chain, or a limiter at an end of an open track), and, where the
+scene's energy can get there, the normal force of the track reaching zero
+(the body leaves the track) and the friction needed to roll exceeding mu N
+(it slips). All constants are runtime parameters, so scenes of one shape
+share compiled code; the piece a body is on is a block of parameters that
+the junction events switch.
 """
 
 from __future__ import annotations
 
 import functools
 import math
+import re
 from dataclasses import dataclass, field
 
 import heyoka as hy
@@ -36,6 +44,7 @@ import mpmath
 
 from ..model._numbers import workprec
 from ..model.scene import ContactPair, Scene
+from ..model.tracks import Dynamics
 from .precision import Precision
 
 #: Interpenetration allowed before a run is declared failed (status overlap):
@@ -96,6 +105,28 @@ class TrackEvent:
 
 
 @dataclass(frozen=True)
+class BoundEvent:
+    """The end of the piece of track body ``body`` is on: ``end`` is 'lower' or 'upper'.
+
+    At a junction of an arc chain the body passes to the next piece (its
+    piece parameters switch); at an end of the track it hits the limiter.
+    """
+
+    body: int
+    end: str
+
+
+@dataclass(frozen=True)
+class PieceBlock:
+    """Where body ``body``'s bounds and piece parameters sit in the parameter vector."""
+
+    body: int
+    lower: int  # index of the piece's lower bound; the upper bound follows it
+    first: int  # index of the first piece parameter
+    size: int
+
+
+@dataclass(frozen=True)
 class SceneSystem:
     """Expressions and parameter values of a scene in one mode, at one precision."""
 
@@ -120,6 +151,21 @@ class SceneSystem:
     weight: tuple[float, ...] = field(default=())
     #: The scene's initial state in this mode's coordinates, at the run's precision.
     initial_state: list = field(default_factory=list)
+    #: Piece ends of each body on an open track (junctions and limiters) and their expressions.
+    bound_events: tuple[BoundEvent, ...] = ()
+    bound_expressions: list = field(default_factory=list)
+    piece_blocks: tuple[PieceBlock, ...] = ()
+    #: Per watched contact where the gap is not linear: the expressions of
+    #: _contact_terms (gap, its gradient, the metrics, the gap's acceleration and jerk).
+    contact_expressions: list = field(default_factory=list)
+    #: Per body, [x_C, y_C, N/m, sigma, driving force per unit mass, q''] (free modes): outputs and checks.
+    body_expressions: list = field(default_factory=list)
+    variables: list = field(default_factory=list)
+    #: What of the track the compiled code depends on (its type; a curve's expression).
+    track_shape: tuple = ()
+    linear_gap: bool = True
+    #: Which bodies are particles (r = 0): a curve's equations and a particle pair's gap differ for them.
+    particles: tuple = ()
 
     @property
     def n_units(self) -> int:
@@ -129,6 +175,8 @@ class SceneSystem:
     def shape(self) -> tuple:
         """Everything the compiled code depends on (constants are parameters)."""
         return (
+            self.track_shape,
+            self.particles,
             self.n_bodies,
             tuple(u.members for u in self.units),
             tuple(c.pair_index for c in self.contacts),
@@ -136,6 +184,10 @@ class SceneSystem:
             tuple((e.body, e.kind, e.terminal) for e in self.track_events),
             self.precision.name,
         )
+
+    @property
+    def coordinate(self) -> str:
+        return self.track_shape[2] if len(self.track_shape) > 2 else "q"
 
     @property
     def pairs(self) -> tuple[ContactPair, ...]:
@@ -214,24 +266,46 @@ def build_system(
     units = singleton_units(n) if units is None else tuple(units)
     nu = len(units)
     allowed = None if pairs is None else {id(p) for p in pairs}
-    psi = _vars("phi", nu) if all(not u.is_cluster for u in units) else _vars("psi", nu)
-    dpsi = _vars("dphi", nu) if all(not u.is_cluster for u in units) else _vars("dpsi", nu)
+    track, g = scene.track, scene.g
+    name = track.coordinate if all(not u.is_cluster for u in units) else "psi"
+    psi, dpsi = _vars(name, nu), _vars(f"d{name}", nu)
     num = precision.number
-    tr, g = scene.track, scene.g
     params: list = []
 
     def par(value) -> hy.expression:
         params.append(num(value))
         return hy.par[len(params) - 1]
 
-    G = [tr.generalized_mass(b) for b in scene.bodies]
-    W = [tr.weight_moment(b, g) for b in scene.bodies]
+    # Each body on an open track: its piece's bounds, then the piece's parameters,
+    # at fixed places so that the junction events can switch them.
+    blocks = []
+    if track.domain(scene.bodies[0]) is not None:
+        for k, body in enumerate(scene.bodies):
+            piece = piece_of(track, body, scene.q[k])
+            lo, hi = piece_bounds(track, body, piece)
+            first = len(params)
+            par(lo)
+            par(hi)
+            values = track.piece_parameters(body, piece)
+            for v in values:
+                par(v)
+            blocks.append(PieceBlock(body=k, lower=first, first=first + 2, size=len(values)))
+    dyn = Dynamics(g=g, frame=scene.frame, par=par)
+
+    def body_terms(k, q, v):
+        block = blocks[k] if blocks else None
+        return track.terms(scene.bodies[k], q, v, dyn, lambda m: hy.par[block.first + m])
+
+    G = [track.generalized_mass(b) for b in scene.bodies] if track.linear_gap else []
+    W = [track.weight_moment(b, g) for b in scene.bodies] if track.linear_gap else []
     equations = [(psi[u], dpsi[u]) for u in range(nu)]
-    accelerations = []
+    accelerations, terms = [], [None] * n
     with workprec():
         for u, unit in enumerate(units):
             if not unit.is_cluster:
-                acc = -par(tr.angular_stiffness(scene.bodies[unit.members[0]], g)) * hy.sin(psi[u])
+                k = unit.members[0]
+                terms[k] = body_terms(k, psi[u], dpsi[u])
+                acc = terms[k].acceleration
             else:
                 total = mpmath.fsum(G[k] for k in unit.members)
                 acc = hy.sum([
@@ -240,10 +314,12 @@ def build_system(
             accelerations.append(acc)
             equations.append((dpsi[u], acc))
 
-    contacts, gaps, guards = [], [], []
+    contacts, gaps, guards, contact_exprs = [], [], [], []
     if nu > 1 and events:
         for a in range(nu):
             b = (a + 1) % nu
+            if b == 0 and not track.closed:
+                continue
             i, j = units[a].members[-1], units[b].members[0]
             index = scene_pair_index(scene, i, j)
             pair = scene.pairs[index]
@@ -251,10 +327,16 @@ def build_system(
                 continue
             if allowed is None and not pair.reachable:
                 continue
-            with workprec():
-                constant = pair.offset - pair.beta - units[a].offsets[-1]
             contacts.append(WatchedContact(pair_index=index, pair=pair, unit_a=a, unit_b=b))
-            gaps.append(psi[b] - psi[a] + par(constant))
+            if track.linear_gap:
+                with workprec():
+                    constant = pair.offset - pair.beta - units[a].offsets[-1]
+                gaps.append(psi[b] - psi[a] + par(constant))
+            else:
+                gap = _gap(scene, i, j, terms[i], terms[j], psi[a], psi[b], par)
+                gaps.append(gap)
+                contact_exprs.append(_contact_terms(gap, terms[i], terms[j], psi[a], psi[b], dpsi[a], dpsi[b],
+                                                    accelerations[a], accelerations[b]))
             # (1 + psi_b^2): measured +16 % per collision on the two-ball hot path,
             # against +10 % for a constant tolerance that large angles would trip.
             guards.append(gaps[-1] + par(OVERLAP_FLOOR) * (1 + psi[b] * psi[b]))
@@ -269,13 +351,32 @@ def build_system(
             links.append(ContactLink(unit=u, position=m, pair_index=scene_pair_index(scene, k, unit.members[m + 1])))
             link_exprs.append(hy.sum(list(partial)))
 
-    track_events, track_exprs = _track_events(scene, units, psi, dpsi, par) if events else ([], [])
+    bound_events, bound_exprs = [], []
+    if blocks and events:
+        for u, unit in enumerate(units):
+            k = unit.members[0]
+            chain = len(track.junctions(scene.bodies[k])) > 0
+            # Without junctions only the outermost bodies can reach a limiter.
+            if chain or k == 0:
+                bound_events.append(BoundEvent(k, "lower"))
+                bound_exprs.append(psi[u] - hy.par[blocks[k].lower])
+            if chain or k == n - 1:
+                bound_events.append(BoundEvent(k, "upper"))
+                bound_exprs.append(hy.par[blocks[k].lower + 1] - psi[u])
+
+    track_events, track_exprs = _track_events(scene, units, psi, dpsi, par, body_terms, terms) if events else ([], [])
     unit_of = [0] * n
     for u, unit in enumerate(units):
         for k in unit.members:
             unit_of[k] = u
-    start = [num(x) for x in scene.phi]
-    rates = [num(x) for x in scene.dphi]
+    start = [num(x) for x in scene.q]
+    rates = [num(x) for x in scene.dq]
+    body_exprs = [[t.x_c, t.y_c, t.normal, t.sigma, t.driving, t.acceleration] for t in terms] if nu == n else []
+    if not events:
+        # The bare equations: only the parameters they read (a caller passes them to heyoka,
+        # which wants exactly those up to the last one used).
+        used = [int(m) for eq in equations for m in re.findall(r"\bp(\d+)\b", str(eq[1]))]
+        del params[max(used, default=-1) + 1:]
     return SceneSystem(
         initial_state=[start[u.members[0]] for u in units] + [rates[u.members[0]] for u in units],
         equations=equations,
@@ -294,7 +395,61 @@ def build_system(
         unit_of=tuple(unit_of),
         gen_mass=tuple(float(x) for x in G),
         weight=tuple(float(x) for x in W),
+        bound_events=tuple(bound_events),
+        bound_expressions=bound_exprs,
+        piece_blocks=tuple(blocks),
+        contact_expressions=contact_exprs,
+        body_expressions=body_exprs,
+        variables=psi + dpsi,
+        track_shape=track_shape(track, scene.frame),
+        linear_gap=track.linear_gap,
+        particles=tuple(b.is_particle for b in scene.bodies),
     )
+
+
+def track_shape(track, frame) -> tuple:
+    """What of a track compiled code depends on: its type, a curve's expression, a turning plane."""
+    return (track.kind, getattr(track, "text", None), track.coordinate, frame.rotating)
+
+
+def piece_of(track, body, q) -> int:
+    """The piece of track holding coordinate q (a junction belongs to the piece after it)."""
+    return sum(1 for s in track.junctions(body) if q >= s)
+
+
+def piece_bounds(track, body, piece: int):
+    """(lower, upper) coordinate of a piece: junctions, or the track's ends."""
+    lo, hi = track.domain(body)
+    cuts = [lo, *track.junctions(body), hi]
+    return cuts[piece], cuts[piece + 1]
+
+
+def _gap(scene, i, j, ti, tj, qi, qj, par):
+    """Distance between the surfaces of bodies i and j (m); q_j - q_i for two particles."""
+    d = scene.bodies[i].radius + scene.bodies[j].radius
+    if d == 0:  # two points of one curve: a signed gap along it
+        return qj - qi
+    dx, dy = tj.x_c - ti.x_c, tj.y_c - ti.y_c
+    return hy.sqrt(dx * dx + dy * dy) - par(d)
+
+
+def _contact_terms(gap, ti, tj, qi, qj, vi, vj, ai, aj) -> list:
+    """[gap, dgap/dq_i, dgap/dq_j, sigma_i, sigma_j, d2gap/dt2, d3gap/dt3] of a pair, as expressions.
+
+    The gradient gives the gap rate dgap/dt = g_i q_i' + g_j q_j' (and the
+    direction of the fallback impulse), sigma the law's metric at the
+    contact; the gap's acceleration and jerk judge whether bodies that do
+    not separate are pressed together (persistent contact, see
+    events.below_resolution).
+    """
+    gi, gj = hy.diff(gap, qi), hy.diff(gap, qj)
+    rate = gi * vi + gj * vj
+
+    def d_dt(x):
+        return hy.diff(x, qi) * vi + hy.diff(x, qj) * vj + hy.diff(x, vi) * ai + hy.diff(x, vj) * aj
+
+    acc = d_dt(rate)
+    return [gap, gi, gj, ti.sigma, tj.sigma, acc, d_dt(acc)]
 
 
 def _vars(prefix: str, n: int) -> list:
@@ -303,42 +458,42 @@ def _vars(prefix: str, n: int) -> list:
     return [made] if n == 1 else list(made)
 
 
-def _track_events(scene: Scene, units, psi, dpsi, par):
+def _track_events(scene: Scene, units, psi, dpsi, par, body_terms, free_terms):
     """Normal force and friction events, only for bodies the energy can take there.
 
-    Per unit mass, the track pushes with N/m = rho phi'^2 + g cos phi and
-    rolling needs the friction F/m = g sin phi (1 - 1/kappa) (paper eqs. 21,
-    25). On a one-sided track N = 0 ends the run; on a two-sided one (the
-    default) the first time is recorded as a warning. N can vanish
-    only above the centre's height (cos phi < 0): a body whose weight moment
-    exceeds the system's whole energy never gets there. Bodies in a cluster
-    are checked with these free-body forces (the contact force's share is
-    not included; see README).
+    The track pushes with N (per unit mass, :class:`heyroll.model.tracks.BodyTerms`;
+    on the circle N/m = rho phi'^2 + g cos phi) and rolling needs the friction
+    F = (1 - 1/kappa) times the driving force (on the circle m g sin phi
+    (1 - 1/kappa), paper eqs. 21, 25). On a one-sided track N = 0 ends the
+    run; on a two-sided one (the default) the first time is recorded as a
+    warning. On a fixed circle N can vanish only above the centre's height
+    (cos phi < 0): a body whose weight moment exceeds the system's whole
+    energy never gets there. Bodies in a cluster are checked with these
+    free-body forces (the contact force's share is not included; see README).
     """
-    tr, g = scene.track, scene.g
-    energy = scene.total_energy()
+    tr = scene.track
+    bounded = tr.linear_gap and not scene.frame.rotating
+    energy = scene.total_energy() if bounded else None
     mu = scene.track_friction
     events, exprs = [], []
     for u, unit in enumerate(units):
         for k, o in zip(unit.members, unit.offsets):
             body = scene.bodies[k]
-            rho = tr.path_radius(body)
-            reach_top_half = energy >= tr.weight_moment(body, scene.g) * (1 - mpmath.mpf(10) ** -9)
+            # Above the horizontal diameter the body needs W (1 - cos phi) > W of energy.
+            reach_top_half = not bounded or energy >= tr.weight_moment(body, scene.g) * (1 - mpmath.mpf(10) ** -9)
             slips = mu is not None and body.kappa > 1
             if not (reach_top_half or slips):
                 continue
-            phi = psi[u] + par(o) if unit.is_cluster else psi[u]
-            # Above the horizontal diameter the body needs W (1 - cos phi) > W of energy.
+            terms = body_terms(k, psi[u] + par(o), dpsi[u]) if unit.is_cluster else free_terms[k]
             if reach_top_half:
                 events.append(TrackEvent(body=k, kind="left_track", terminal=scene.track_sides == "one"))
-                exprs.append(par(rho) * dpsi[u] ** 2 + par(g) * hy.cos(phi))
+                exprs.append(terms.normal)
             if slips:
-                normal = par(rho) * dpsi[u] ** 2 + par(g) * hy.cos(phi)
-                friction = par(g * (1 - 1 / body.kappa)) * hy.sin(phi)
+                friction = par(1 - 1 / body.kappa) * terms.driving
                 events.append(TrackEvent(body=k, kind="slip"))
-                exprs.append(par(mu) * normal - friction)
+                exprs.append(par(mu) * terms.normal - friction)
                 events.append(TrackEvent(body=k, kind="slip"))
-                exprs.append(par(mu) * normal + friction)
+                exprs.append(par(mu) * terms.normal + friction)
     return events, exprs
 
 

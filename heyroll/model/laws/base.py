@@ -1,10 +1,19 @@
 """The collision-law strategy interface.
 
-Every law here is of Newton type in some generalized velocity u_i = c_i phi_i'
-with some inertia M_i: the sum M_i u_i is conserved and the difference of u is
-reversed and scaled by the restitution k (paper eqs. 1-2 and 8-9). Such a law
-is linear in the pre-collision velocities, so it compiles to an impulse map
-(three constants) that the engine applies in the collision callback.
+Every law here is of Newton type in some velocity u_i = c_i q_i' (q the
+body's generalized coordinate on its track) with some inertia M_i: the sum
+M_i u_i is conserved and the difference of u is reversed and scaled by the
+restitution k (paper eqs. 1-2 and 8-9).
+
+A law is written on the generalized rate q' and the track's metric at the
+contact point, sigma = |dC/dq| (C the body's centre): the centre speed is
+v_C = sigma q', the rolling angular velocity omega_P = sigma q'/r (eqs. 22-23,
+98, 100), the kinetic energy 1/2 kappa m sigma^2 q'^2. On the circle
+sigma = R - r for every phi, so the law compiles once per pair to an
+impulse map (three constants); on other tracks the engine reads sigma at
+each contact. c and M are powers of sigma times a body's constant
+(``scale_power``, ``inertia_power``), so the engine evaluates them in the
+run's own number type.
 """
 
 from __future__ import annotations
@@ -16,7 +25,6 @@ import mpmath
 
 from .._numbers import workprec
 from ..bodies import Body
-from ..tracks import CircleTrack
 
 
 @dataclass(frozen=True)
@@ -58,9 +66,12 @@ class CollisionLaw(Protocol):
     #: Where the law comes from (paper and equation numbers).
     source: ClassVar[str]
     restitution: mpmath.mpf
+    #: c = c_1 sigma^scale_power, M = M_1 sigma^inertia_power (c_1, M_1: variables at sigma = 1)
+    scale_power: ClassVar[int]
+    inertia_power: ClassVar[int]
 
-    def variables(self, track: CircleTrack, body: Body) -> LawVariables:
-        """The law's velocity scale and inertia for ``body`` on ``track``."""
+    def variables(self, body: Body, sigma) -> LawVariables:
+        """The law's velocity scale and inertia for ``body`` where |dC/dq| = sigma."""
         ...
 
 
@@ -76,9 +87,9 @@ def check_restitution(k) -> mpmath.mpf:
     return x
 
 
-def impulse_map(law: CollisionLaw, track: CircleTrack, body_i: Body, body_j: Body) -> ImpulseMap:
-    """Compile ``law`` for the pair (i, j) into an :class:`ImpulseMap` (eqs. 10-11)."""
-    vi, vj = law.variables(track, body_i), law.variables(track, body_j)
+def impulse_map(law: CollisionLaw, body_i: Body, body_j: Body, sigma_i, sigma_j) -> ImpulseMap:
+    """Compile ``law`` for the pair (i, j) at metrics sigma_i, sigma_j into an :class:`ImpulseMap` (eqs. 10-11)."""
+    vi, vj = law.variables(body_i, sigma_i), law.variables(body_j, sigma_j)
     with workprec():
         k = law.restitution
         total = vi.inertia + vj.inertia
@@ -90,18 +101,18 @@ def impulse_map(law: CollisionLaw, track: CircleTrack, body_i: Body, body_j: Bod
         )
 
 
-def law_velocities(law: CollisionLaw, track: CircleTrack, body: Body, dphi):
-    """u = c phi' for ``body`` (omega_P for the rolling law, v_C for Newton's)."""
-    return law.variables(track, body).scale * dphi
+def law_velocities(law: CollisionLaw, body: Body, sigma, rate):
+    """u = c q' for ``body`` (omega_P for the rolling law, v_C for Newton's)."""
+    return law.variables(body, sigma).scale * rate
 
 
-def outgoing(law: CollisionLaw, track: CircleTrack, body_i: Body, body_j: Body, u_i, u_j):
+def outgoing(law: CollisionLaw, body_i: Body, body_j: Body, u_i, u_j, sigma_i, sigma_j):
     """Outgoing law velocities (u_i+, u_j+) from incoming ones, eqs. (10)-(11).
 
     Written as in the paper, in the law's own variables, for tables and tests;
     the engine uses the equivalent :func:`impulse_map`.
     """
-    vi, vj = law.variables(track, body_i), law.variables(track, body_j)
+    vi, vj = law.variables(body_i, sigma_i), law.variables(body_j, sigma_j)
     with workprec():
         k = law.restitution
         ratio_ij = vi.inertia / vj.inertia
@@ -127,7 +138,7 @@ def kinetic_energy_change(inertia_i, inertia_j, k, du):
     return -reduced / 2 * (1 - k * k) * du * du
 
 
-def conserves_mechanical_energy_bound(law: CollisionLaw, track: CircleTrack, body_i: Body, body_j: Body) -> bool:
+def conserves_mechanical_energy_bound(law: CollisionLaw, body_i: Body, body_j: Body, sigma_i, sigma_j) -> bool:
     """True when this law can never raise the pair's mechanical energy.
 
     The law dissipates its own kinetic energy 1/2 M u^2 = 1/2 M c^2 phi'^2
@@ -136,10 +147,10 @@ def conserves_mechanical_energy_bound(law: CollisionLaw, track: CircleTrack, bod
     rho^2) agrees for i and j; otherwise (e.g. Newton's law on centre speeds
     for a disk hitting a ring) an elastic collision can create energy.
     """
-    def ratio(body):
-        v = law.variables(track, body)
-        return v.inertia * v.scale**2 / track.generalized_mass(body)
+    def ratio(body, sigma):
+        v = law.variables(body, sigma)
+        return v.inertia * v.scale**2 / (body.kappa * body.mass * sigma**2)
 
     with workprec():
-        ri, rj = ratio(body_i), ratio(body_j)
+        ri, rj = ratio(body_i, sigma_i), ratio(body_j, sigma_j)
         return abs(ri - rj) <= mpmath.mpf(2) ** (-200) * abs(ri)

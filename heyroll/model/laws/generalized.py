@@ -20,7 +20,6 @@ import mpmath
 
 from .._numbers import workprec
 from ..bodies import Body
-from ..tracks import CircleTrack
 from .base import LawVariables, check_restitution
 
 
@@ -35,6 +34,9 @@ class GeneralizedNewtonLaw:
     def __post_init__(self):
         object.__setattr__(self, "restitution", check_restitution(self.restitution))
 
-    def variables(self, track: CircleTrack, body: Body) -> LawVariables:
+    scale_power: ClassVar[int] = 0
+    inertia_power: ClassVar[int] = 2
+
+    def variables(self, body: Body, sigma) -> LawVariables:
         with workprec():
-            return LawVariables(scale=mpmath.mpf(1), inertia=track.generalized_mass(body))
+            return LawVariables(scale=mpmath.mpf(1), inertia=body.kappa * body.mass * mpmath.mpf(sigma) ** 2)

@@ -20,7 +20,6 @@ import mpmath
 from ...errors import SceneError
 from .._numbers import workprec
 from ..bodies import Body
-from ..tracks import CircleTrack
 from .base import LawVariables, check_restitution
 
 
@@ -35,7 +34,10 @@ class HedrihRollingLaw:
     def __post_init__(self):
         object.__setattr__(self, "restitution", check_restitution(self.restitution))
 
-    def variables(self, track: CircleTrack, body: Body) -> LawVariables:
+    scale_power: ClassVar[int] = 1
+    inertia_power: ClassVar[int] = 0
+
+    def variables(self, body: Body, sigma) -> LawVariables:
         if body.is_particle:
             raise SceneError(
                 "collision.law",
@@ -43,4 +45,4 @@ class HedrihRollingLaw:
                 "for a particle; use 'newton' or 'newton_generalized'",
             )
         with workprec():
-            return LawVariables(scale=track.rolling_ratio(body), inertia=body.rolling_inertia())
+            return LawVariables(scale=mpmath.mpf(sigma) / body.radius, inertia=body.rolling_inertia())

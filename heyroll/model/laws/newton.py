@@ -16,7 +16,6 @@ import mpmath
 
 from .._numbers import workprec
 from ..bodies import Body
-from ..tracks import CircleTrack
 from .base import LawVariables, check_restitution
 
 
@@ -31,6 +30,9 @@ class NewtonCentreLaw:
     def __post_init__(self):
         object.__setattr__(self, "restitution", check_restitution(self.restitution))
 
-    def variables(self, track: CircleTrack, body: Body) -> LawVariables:
+    scale_power: ClassVar[int] = 1
+    inertia_power: ClassVar[int] = 0
+
+    def variables(self, body: Body, sigma) -> LawVariables:
         with workprec():
-            return LawVariables(scale=track.path_radius(body), inertia=body.mass)
+            return LawVariables(scale=+mpmath.mpf(sigma), inertia=body.mass)

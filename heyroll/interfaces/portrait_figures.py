@@ -1,4 +1,4 @@
-"""Figures for path tracks (paper sections 5-6).
+"""Phase portraits and run figures on open tracks (paper sections 5-6).
 
 * :func:`portrait_figure`: the complete phase portrait of one body (level
   curves of the first integral, separatrices through the saddles, centres,
@@ -18,11 +18,22 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..analysis.equilibria import EquilibriumProblem, bifurcation_diagram, find_equilibria, problem_of
-from ..model.path_scene import PathScene
-from ..model.paths import ArcChainTrack
-from ..model.scene import RunSettings
-from ..simulation.path_driver import PathResult, body_energy, simulate_path, speed_factor
+from ..model.scene import RunSettings, Scene
+from ..model.tracks import ArcChainTrack, first_integral
+from ..simulation.driver import simulate
+from ..simulation.result import SimulationResult
 from .figures import _save
+
+
+
+def body_energy(scene: Scene, body: int, q, v):
+    """First integral of one body (J), float64 (eq. 92)."""
+    return first_integral(scene.track, scene.bodies[body], q, v, scene.g, scene.frame)
+
+
+def speed_factor(scene: Scene, body: int, q):
+    """sigma = |dC/dq| of one body at q."""
+    return scene.track.sigma(scene.bodies[body], np.asarray(q, dtype=float))
 
 GRID = 500
 
@@ -36,27 +47,27 @@ class PortraitCheck:
     duration: float
 
 
-def first_integral_grid(scene: PathScene, body: int, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+def first_integral_grid(scene: Scene, body: int, q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """H per unit mass on the (q, v) grid: 1/2 kappa F v^2 + V/m."""
     Q, Vv = np.meshgrid(q, v)
     m = float(scene.bodies[body].mass)
     return body_energy(scene, body, Q.ravel(), Vv.ravel()).reshape(Q.shape) / m
 
 
-def _velocity_range(scene: PathScene, body: int, q: np.ndarray, problem: EquilibriumProblem) -> float:
+def _velocity_range(scene: Scene, body: int, q: np.ndarray, problem: EquilibriumProblem) -> float:
     V = problem.potential(q)
     F = speed_factor(scene, body, q) ** 2
     kappa = float(scene.bodies[body].kappa)
     return 1.15 * float(np.sqrt(2 * (V.max() - V.min()) / (kappa * F.min())))
 
 
-def _junctions(scene: PathScene, body: int) -> list[float]:
+def _junctions(scene: Scene, body: int) -> list[float]:
     if isinstance(scene.track, ArcChainTrack):
         return [p.s0 for p in scene.track.pieces(scene.bodies[body])[1:]]
     return []
 
 
-def portrait_figure(scene: PathScene, path, *, body: int = 0, trajectories: int = 4,
+def portrait_figure(scene: Scene, path, *, body: int = 0, trajectories: int = 4,
                     duration: float | None = None) -> PortraitCheck:
     problem = problem_of(scene, body)
     lo, hi = problem.domain
@@ -104,10 +115,10 @@ def _overlay(scene, body, problem, eq, ax, duration) -> PortraitCheck:
     worst, T = 0.0, duration or 4 * float(np.sqrt((hi - lo) / problem.g)) * 3
     bodies = (scene.bodies[body],)
     for k, q0 in enumerate(starts):
-        single = PathScene.make(scene.track, bodies, [q0], [0], law=scene.law,
-                                limiter_restitution=1, frame=scene.frame, g=scene.g, run=RunSettings.make(T),
-                                name=scene.name)
-        res = simulate_path(single, keep_branches=True)
+        single = Scene.make(scene.track, bodies, [q0], [0], law=scene.law,
+                            limiter_restitution=1, frame=scene.frame, g=scene.g, run=RunSettings.make(T),
+                            name=scene.name)
+        res = simulate(single, dense=True, precision="long")
         t, X = res.sample(3000)
         H = body_energy(single, 0, X[:, 0].astype(float), X[:, 1].astype(float))
         scale = max(abs(res.energy_initial), float(single.bodies[0].mass) * problem.g * (hi - lo))
@@ -116,7 +127,7 @@ def _overlay(scene, body, problem, eq, ax, duration) -> PortraitCheck:
     return PortraitCheck(trajectories=len(starts), worst_relative_drift=worst, duration=T)
 
 
-def energy_surface_figure(scene: PathScene, path, *, body: int = 0) -> None:
+def energy_surface_figure(scene: Scene, path, *, body: int = 0) -> None:
     problem = problem_of(scene, body)
     lo, hi = problem.domain
     q = np.linspace(lo, hi, 160)
@@ -135,7 +146,7 @@ def energy_surface_figure(scene: PathScene, path, *, body: int = 0) -> None:
     _save(fig, path)
 
 
-def bifurcation_figure(scene: PathScene, path, omegas, *, body: int = 0) -> list:
+def bifurcation_figure(scene: Scene, path, omegas, *, body: int = 0) -> list:
     problem = problem_of(scene, body)
     diagram = bifurcation_diagram(problem, omegas)
     fig = Figure(figsize=(8, 5))
@@ -170,23 +181,25 @@ def bifurcation_figure(scene: PathScene, path, omegas, *, body: int = 0) -> list
     return diagram
 
 
-def branches_figure(result: PathResult, path, *, max_points: int = 4000) -> None:
+def branches_figure(result: SimulationResult, path, *, max_points: int = 4000) -> None:
+    """Each body's phase trajectory (a dense run), a colour per branch between collisions, dotted jumps."""
     scene = result.scene
     t, X = result.sample(max_points)
-    times = np.array([c["t"] for c in result.collisions])
+    table = result.collision_table()
+    times = np.asarray(table["t"], dtype=float)
     n = len(scene.bodies)
     fig = Figure(figsize=(9, 3.2 * n))
     for b in range(n):
         ax = fig.add_subplot(n, 1, b + 1)
-        q, v = X[:, 2 * b].astype(float), X[:, 2 * b + 1].astype(float)
+        q, v = X[:, b], X[:, n + b]
         seg = np.searchsorted(times, t, side="right")
         for k in np.unique(seg):
             sel = seg == k
             ax.plot(q[sel], v[sel], lw=0.8, color=f"C{k % 10}")
-        for c in result.collisions:
-            if b + 1 in (c["i"], c["j"]):
-                side = "i" if c["i"] == b + 1 else "j"
-                ax.plot([c[f"q_{side}"]] * 2, [c[f"v_{side}_before"], c[f"v_{side}_after"]], "k:", lw=0.8)
+        for row in table:
+            if b + 1 in (row["i"], row["j"]):
+                side = "i" if row["i"] == b + 1 else "j"
+                ax.plot([row[f"q_{side}"]] * 2, [row[f"dq_{side}_before"], row[f"dq_{side}_after"]], "k:", lw=0.8)
         ax.set_ylabel(f"body {b + 1}: d{scene.coordinate}/dt")
     ax.set_xlabel(scene.coordinate)
     fig.suptitle(f"{scene.name}: phase trajectory branches (colour changes at each collision; dotted: jumps)",
@@ -194,14 +207,15 @@ def branches_figure(result: PathResult, path, *, max_points: int = 4000) -> None
     _save(fig, path)
 
 
-def body_energy_figure(result: PathResult, path, *, max_points: int = 4000) -> None:
+def body_energy_figure(result: SimulationResult, path, *, max_points: int = 4000) -> None:
     scene = result.scene
     t, X = result.sample(max_points)
     fig = Figure(figsize=(9, 4))
     ax = fig.add_subplot()
     total = 0
-    for b in range(len(scene.bodies)):
-        H = body_energy(scene, b, X[:, 2 * b].astype(float), X[:, 2 * b + 1].astype(float))
+    n = len(scene.bodies)
+    for b in range(n):
+        H = body_energy(scene, b, X[:, b], X[:, n + b])
         total = total + H
         ax.plot(t, H, lw=0.9, label=f"body {b + 1}")
     ax.plot(t, total, "k", lw=1.2, label="sum")

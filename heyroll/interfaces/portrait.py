@@ -1,6 +1,5 @@
-"""Files of runs and analyses on path tracks (arc chains, curves, rotating plane).
+"""Files of the analyses of one body on an open track: equilibria and the phase portrait.
 
-``write_path_run``: collisions.csv, limiters.csv, summary.json and figures.
 ``write_portrait``: portrait.png, energy_surface.png, bifurcation.png and
 portrait.json (equilibria, bifurcations, the check of the portrait against
 integrated trajectories). Every file is written atomically.
@@ -14,53 +13,22 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.equilibria import bifurcations, find_equilibria, problem_of
-from ..model.path_scene import PathScene
-from ..simulation.path_driver import COLLISION_COLUMNS, LIMITER_COLUMNS, PathResult
+from ..model.scene import Scene
 from .outputs import atomic_write_text, versions
 
-INTEGER = {"n", "i", "j", "law_flag", "body"}
 
-
-def rows_csv(rows: list[dict], columns) -> str:
-    lines = [",".join(columns)]
-    for row in rows:
-        lines.append(",".join(str(row[c]) if c in INTEGER or isinstance(row[c], str) else f"{row[c]:.17g}"
-                              for c in columns))
-    return "\n".join(lines) + "\n"
-
-
-def write_path_run(result: PathResult, out_dir: Path, *, scene_source: str, figures: bool = True) -> dict:
-    out_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out_dir / "collisions.csv", rows_csv(result.collisions, COLLISION_COLUMNS))
-    atomic_write_text(out_dir / "limiters.csv", rows_csv(result.limiter_impacts, LIMITER_COLUMNS))
-    files = {"collisions": "collisions.csv", "limiters": "limiters.csv", "summary": "summary.json"}
-    if figures and result.branches:
-        from .path_figures import body_energy_figure, branches_figure
-
-        branches_figure(result, out_dir / "phase_branches.png")
-        body_energy_figure(result, out_dir / "energy.png")
-        files.update(phase_branches="phase_branches.png", energy="energy.png")
-    summary = result.summary()
-    summary.update(scene_source=scene_source, track=result.scene.track.kind,
-                   coordinate=result.scene.coordinate, omega=float(result.scene.frame.omega),
-                   axis_x=float(result.scene.frame.axis_x), files=files, versions=versions(),
-                   state_final=[float(x) for x in result.state])
-    atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2, allow_nan=True) + "\n")
-    return summary
-
-
-def equilibria_list(scene: PathScene, body: int = 0) -> list:
+def equilibria_list(scene: Scene, body: int = 0) -> list:
     return find_equilibria(problem_of(scene, body))
 
 
-def default_omegas(scene: PathScene) -> np.ndarray:
+def default_omegas(scene: Scene) -> np.ndarray:
     """0 to twice the largest of the scene's Omega and sqrt(g / smallest centre-path radius)."""
     om = float(scene.frame.omega)
     return np.linspace(0.0, 2 * max(om, 3.0), 121)
 
 
-def write_portrait(scene: PathScene, out_dir: Path, *, scene_source: str, body: int = 0, omegas=None) -> dict:
-    from .path_figures import bifurcation_figure, energy_surface_figure, portrait_figure
+def write_portrait(scene: Scene, out_dir: Path, *, scene_source: str, body: int = 0, omegas=None) -> dict:
+    from .portrait_figures import bifurcation_figure, energy_surface_figure, portrait_figure
 
     out_dir.mkdir(parents=True, exist_ok=True)
     omegas = default_omegas(scene) if omegas is None else omegas

@@ -1,34 +1,28 @@
-"""Tracks other than the circle (paper section 5) and the rotating frame (5.3).
+"""A chain of circular arcs and straight segments with limiters at both ends (paper section 5.1).
 
-Two kinds of track, both in a vertical plane (x to the right, y up):
-
-* :class:`ArcChainTrack`, circular arcs (concave: the body rolls inside;
-  convex: on top) and straight segments joined with continuous tangents
-  (section 5.1, Figs. 13-16). The coordinate of a body is ``s``, the arc
-  length along the path of its centre; on each piece that path is a circle of
-  radius R - r (concave) or R0 + r (convex) or a straight line, and its
-  curvature jumps at the junctions.
-* :class:`CurveTrack`, a curve y = f(x) given as an expression; the coordinate
-  is the abscissa x of the contact point (section 5.3, eqs. 91-95).
-
-The body always lies on the left of the direction in which the track runs
-(so on top of a curve run from left to right). Its centre is the contact point
-plus r times the left normal. A :class:`Frame` rotates the plane about a
-vertical axis at constant Omega.
+Arcs (concave: the body rolls inside; convex: on top) and lines joined with
+continuous tangents (Figs. 13-16). The coordinate of a body is ``s``, the arc
+length along the path of its centre; on each piece that path is a circle of
+radius R - r (concave) or R + r (convex) or a straight line, and its
+curvature jumps at the junctions. The body lies on the left of the direction
+in which the track runs; its centre is the contact point plus r times the
+left normal.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import ClassVar
 
+import heyoka as hy
 import mpmath
 import numpy as np
 
-from ..errors import SceneError
-from . import expression as ex
-from ._numbers import Real, is_finite, to_mpf, workprec
-from .bodies import Body, Shape
+from ...errors import SceneError
+from .._numbers import Real, to_mpf, workprec
+from ..bodies import Body, Shape
+from .base import BodyTerms, Dynamics
 
 #: Moment of inertia about a diameter (the vertical axis through the centre,
 #: when the body rolls in a vertical plane), in units of m r^2. It only shifts
@@ -50,28 +44,6 @@ def diametral_inertia(body: Body) -> mpmath.mpf | None:
         return None
     with workprec():
         return DIAMETRAL_INERTIA[body.shape] * body.mass * body.radius**2
-
-
-@dataclass(frozen=True)
-class Frame:
-    """The vertical plane rotates about the vertical line x = axis_x at omega (rad/s)."""
-
-    omega: mpmath.mpf
-    axis_x: mpmath.mpf
-
-    @classmethod
-    def make(cls, omega: Real = 0, axis_x: Real = 0, field: str = "frame") -> "Frame":
-        for name, value in (("omega", omega), ("axis_x", axis_x)):
-            if not is_finite(value):
-                raise SceneError(f"{field}.{name}", f"must be a finite number, got {value!r}")
-        return cls(omega=to_mpf(omega), axis_x=to_mpf(axis_x))
-
-    @property
-    def rotating(self) -> bool:
-        return self.omega != 0
-
-
-STATIONARY = Frame(mpmath.mpf(0), mpmath.mpf(0))
 
 
 # -------------------------------------------------------------------- arc chains
@@ -139,7 +111,11 @@ class ArcChainTrack:
     segments: tuple[Segment, ...]
     start_x: mpmath.mpf
     start_y: mpmath.mpf
-    kind = "arcs"
+    kind: ClassVar[str] = "arcs"
+    coordinate: ClassVar[str] = "s"
+    closed: ClassVar[bool] = False
+    linear_gap: ClassVar[bool] = False
+    constant_metric: ClassVar[bool] = True  # s is the centre's arc length: sigma = 1
 
     @classmethod
     def make(cls, segments, start_x: Real = 0, start_y: Real = 0, field: str = "track") -> "ArcChainTrack":
@@ -172,28 +148,6 @@ class ArcChainTrack:
                     f"vs {float(before):.17g} rad (a jump of {jump:.3g} rad); the track must be smooth",
                 )
         return cls(segments=segs, start_x=to_mpf(start_x), start_y=to_mpf(start_y))
-
-    @classmethod
-    def three_arcs(cls, radius: Real, hump_radius: Real, beta: Real = 0, field: str = "track") -> "ArcChainTrack":
-        """Paper section 5.1: concave R, convex R0, concave R with central angles
-        3pi/2 - beta, pi - 2 beta, 3pi/2 - beta (Figs. 13-16); the hump's centre
-        is at the origin, so x = 0 is the axis of symmetry."""
-        R, R0, b = (to_mpf(v) for v in (radius, hump_radius, beta))
-        if not R > 0:
-            raise SceneError(f"{field}.radius", f"must be > 0, got {radius}")
-        if not R0 > 0:
-            raise SceneError(f"{field}.hump_radius", f"must be > 0, got {hump_radius}")
-        if not (0 <= b < mpmath.pi / 2):
-            raise SceneError(f"{field}.beta", f"must be in [0, pi/2), got {beta}")
-        with workprec():
-            half = mpmath.pi / 2 - b
-            d = R + R0
-            segs = (
-                Segment("arc", R, "concave", -mpmath.pi, half),
-                Segment("arc", R0, "convex", -half, half),
-                Segment("arc", R, "concave", -half, mpmath.pi),
-            )
-            return cls.make(segs, start_x=-d * mpmath.cos(b), start_y=d * mpmath.sin(b) + R, field=field)
 
     def surface_points(self):
         """Start point of each segment and the chain's end point (mpmath)."""
@@ -245,6 +199,69 @@ class ArcChainTrack:
     def path_length(self, body: Body) -> float:
         return self.pieces(body)[-1].s1
 
+    # -- the Track strategy ------------------------------------------------
+
+    def domain(self, body: Body):
+        pieces = self.pieces(body, exact=True)
+        return pieces[0].s0, pieces[-1].s1
+
+    def junctions(self, body: Body) -> tuple:
+        return tuple(p.s0 for p in self.pieces(body, exact=True)[1:])
+
+    def piece_parameters(self, body: Body, piece: int) -> tuple:
+        p = self.pieces(body, exact=True)[piece]
+        return (p.alpha0, p.c, p.s0, p.A, p.B, p.D, p.E, p.G)
+
+    def terms(self, body: Body, q, v, dyn: Dynamics, piece_par) -> BodyTerms:
+        """On each piece alpha = alpha0 + c (s - s0); sigma = 1, so eq. (93) reads
+        s'' = -g/kappa sin(alpha) + Omega^2/kappa (x_C - a) cos(alpha)."""
+        alpha0, c, s0, A, B, D, E, G = (piece_par(k) for k in range(8))
+        alpha = alpha0 + c * (q - s0)
+        x_c = A + B * hy.sin(alpha) + D * (q - s0)
+        y_c = E - B * hy.cos(alpha) + G * (q - s0)
+        g = dyn.par(dyn.g)
+        acc = -dyn.par(dyn.g / body.kappa) * hy.sin(alpha)
+        # along the left normal (-sin, cos): c v^2 = N/m - g cos(alpha) - Omega^2 (x_C - a) sin(alpha)
+        normal = c * v * v + g * hy.cos(alpha)
+        driving = -g * hy.sin(alpha)
+        if dyn.frame.rotating:
+            with workprec():
+                om2, om2_k = dyn.frame.omega**2, dyn.frame.omega**2 / body.kappa
+            arm = x_c - dyn.par(dyn.frame.axis_x)
+            acc = acc + dyn.par(om2_k) * arm * hy.cos(alpha)
+            normal = normal + dyn.par(om2) * arm * hy.sin(alpha)
+            driving = driving + dyn.par(om2) * arm * hy.cos(alpha)
+        return BodyTerms(x_c=x_c, y_c=y_c, acceleration=acc, normal=normal, sigma=hy.expression(1.0),
+                         driving=driving)
+
+    def centre(self, body: Body, q):
+        pieces = self.pieces(body)
+        q = np.asarray(q, dtype=float)
+        idx = piece_index(pieces, q)
+        xs, ys = np.empty(q.shape), np.empty(q.shape)
+        for k, piece in enumerate(pieces):
+            sel = idx == k
+            if np.any(sel):
+                xs[sel], ys[sel] = piece.centre(q[sel])
+        return xs, ys
+
+    def sigma(self, body: Body, q):
+        return np.ones(np.shape(q))
+
+    def tangent_angle(self, body: Body, q):
+        pieces = self.pieces(body)
+        q = np.asarray(q, dtype=float)
+        idx = piece_index(pieces, q)
+        out = np.empty(q.shape)
+        for k, piece in enumerate(pieces):
+            sel = idx == k
+            if np.any(sel):
+                out[sel] = piece.alpha(q[sel])
+        return out
+
+    def describe(self) -> str:
+        return f"an arc chain of {len(self.segments)} segments"
+
     def coordinate_of(self, body: Body, segment: int, angle: Real, field: str) -> mpmath.mpf:
         """s for a body on ``segment`` (1-based) at ``angle`` (phi, psi or distance on a line)."""
         if not 1 <= segment <= len(self.segments):
@@ -289,92 +306,9 @@ def _advance(seg: Segment, x, y):
     return ox + seg.radius * mpmath.sin(seg.end), oy + seg.radius * mpmath.cos(seg.end)
 
 
-# ------------------------------------------------------------------ y = f(x)
-
-NUMPY = ex.Library(number=float, functions={"sin": np.sin, "cos": np.cos, "exp": np.exp, "sqrt": np.sqrt})
-MPMATH = ex.Library(number=lambda t: mpmath.mpf(t), functions={
-    "sin": mpmath.sin, "cos": mpmath.cos, "exp": mpmath.exp, "sqrt": mpmath.sqrt})
-
-#: Points at which a curve is checked (curvature, finiteness) before a run.
-CURVE_CHECK_POINTS = 20001
 
 
-@dataclass(frozen=True)
-class CurveTrack:
-    """y = f(x) on [x_min, x_max], limiters at both ends; bodies roll on top."""
-
-    text: str
-    f: ex.Node
-    df: ex.Node
-    d2f: ex.Node
-    d3f: ex.Node
-    x_min: mpmath.mpf
-    x_max: mpmath.mpf
-    kind = "curve"
-
-    @classmethod
-    def make(cls, y: str, x_min: Real, x_max: Real, field: str = "track") -> "CurveTrack":
-        f = ex.parse(y, f"{field}.y")
-        ex.check_differentiable(f, f"{field}.y")
-        for name, value in (("x_min", x_min), ("x_max", x_max)):
-            if not is_finite(value):
-                raise SceneError(f"{field}.{name}", f"must be a finite number, got {value!r}")
-        lo, hi = to_mpf(x_min), to_mpf(x_max)
-        if not hi > lo:
-            raise SceneError(f"{field}.x_max", f"must be > x_min, got x_min = {x_min}, x_max = {x_max}")
-        df = ex.derivative(f)
-        d2f = ex.derivative(df)
-        track = cls(text=y, f=f, df=df, d2f=d2f, d3f=ex.derivative(d2f), x_min=lo, x_max=hi)
-        xs = track.check_grid()
-        with np.errstate(all="ignore"):
-            for node, what in ((f, "y"), (df, "dy/dx"), (d2f, "d2y/dx2")):
-                values = track.numeric(node, xs)
-                bad = ~np.isfinite(values)
-                if bad.any():
-                    raise SceneError(f"{field}.y", f"{what} is not finite at x = {xs[bad][0]:.17g} "
-                                     f"(the curve must be smooth on [x_min, x_max])")
-        return track
-
-    def check_grid(self) -> np.ndarray:
-        return np.linspace(float(self.x_min), float(self.x_max), CURVE_CHECK_POINTS)
-
-    def numeric(self, node: ex.Node, x):
-        value = ex.evaluate(node, np.asarray(x, dtype=float), NUMPY)
-        return np.broadcast_to(value, np.shape(x)).astype(float)
-
-    def curvature(self, x):
-        """Signed curvature f'' / (1 + f'^2)^(3/2), > 0 where the curve is concave up."""
-        d1, d2 = self.numeric(self.df, x), self.numeric(self.d2f, x)
-        return d2 / (1 + d1 * d1) ** 1.5
-
-    def check_body(self, body: Body, field: str) -> None:
-        """The body on top must fit every hollow: curvature radius > r (eq. 94's 1 - r k > 0)."""
-        if body.radius == 0:
-            return
-        xs = self.check_grid()
-        k = self.curvature(xs)
-        n = int(np.argmax(k))
-        # refine the worst point on a finer grid around it
-        h = xs[1] - xs[0]
-        fine = np.linspace(max(xs[0], xs[n] - h), min(xs[-1], xs[n] + h), 2001)
-        kf = self.curvature(fine)
-        m = int(np.argmax(kf))
-        r = float(body.radius)
-        if kf[m] * r >= 1:
-            raise SceneError(
-                f"{field}.radius",
-                f"the curve's radius of curvature falls to {1 / kf[m]:.6g} m at x = {fine[m]:.6g} "
-                f"(concave side), below the body's radius {r:.6g} m: it cannot roll there",
-            )
-
-    def centre(self, x, r: float):
-        """Centre of a body of radius r touching at abscissa x (eq. 95 and its x part)."""
-        d1 = self.numeric(self.df, x)
-        w = np.sqrt(1 + d1 * d1)
-        return x - r * d1 / w, self.numeric(self.f, x) + r / w
-
-    def metric(self, x, r: float):
-        """F(x, r) = (1 + f'^2)(1 - r f''/(1 + f'^2)^(3/2))^2 (eq. 94): |dC/dx|^2."""
-        d1, d2 = self.numeric(self.df, x), self.numeric(self.d2f, x)
-        w2 = 1 + d1 * d1
-        return w2 * (1 - r * d2 / w2**1.5) ** 2
+def piece_index(pieces, s) -> np.ndarray:
+    """Index of the piece holding each s (a junction belongs to the piece after it)."""
+    starts = np.array([float(p.s0) for p in pieces[1:]])
+    return np.searchsorted(starts, np.asarray(s, dtype=float), side="right")

@@ -8,19 +8,33 @@ of radius rho = R - r (a particle, r = 0, slides on the track itself).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
+import heyoka as hy
 import mpmath
+import numpy as np
 
-from ..errors import SceneError
-from ._numbers import Real, is_finite, to_mpf, workprec
-from .bodies import Body
+from ...errors import SceneError
+from .._numbers import Real, is_finite, to_mpf, workprec
+from ..bodies import Body
+from .base import BodyTerms, Dynamics, lagrangian_terms
 
 
 @dataclass(frozen=True)
 class CircleTrack:
-    """A circle of radius R in a vertical plane; bodies roll on its inside."""
+    """A circle of radius R in a vertical plane; bodies roll on its inside.
+
+    Closed (bodies N and 1 can touch across the top), gap linear in the
+    angles (phi_j - phi_i - beta), constant metric sigma = R - r; the equation
+    of motion is the closed form of eq. (25) in a fixed plane.
+    """
 
     radius: mpmath.mpf
+    kind: ClassVar[str] = "circle"
+    coordinate: ClassVar[str] = "phi"
+    closed: ClassVar[bool] = True
+    linear_gap: ClassVar[bool] = True
+    constant_metric: ClassVar[bool] = True
 
     @classmethod
     def of_radius(cls, radius: Real, field: str = "track.radius") -> "CircleTrack":
@@ -38,6 +52,47 @@ class CircleTrack:
                 f"must be < track.radius (r < R), got r = {mpmath.nstr(body.radius, 17)} "
                 f">= R = {mpmath.nstr(self.radius, 17)}",
             )
+
+    # -- the Track strategy ------------------------------------------------
+
+    def domain(self, body: Body):
+        return None
+
+    def junctions(self, body: Body) -> tuple:
+        return ()
+
+    def piece_parameters(self, body: Body, piece: int) -> tuple:
+        return ()
+
+    def terms(self, body: Body, q, v, dyn: Dynamics, piece_par) -> BodyTerms:
+        """Centre rho (sin phi, -cos phi) from the circle's centre; eq. (25) in a fixed plane."""
+        if dyn.frame.rotating:
+            rho = dyn.par(self.path_radius(body))
+            return lagrangian_terms(rho * hy.sin(q), -rho * hy.cos(q), q, v, body.kappa, dyn)
+        # the stiffness first: the engine's hot path reads it as the body's first parameter
+        acceleration = -dyn.par(self.angular_stiffness(body, dyn.g)) * hy.sin(q)
+        rho = dyn.par(self.path_radius(body))
+        g = dyn.par(dyn.g)
+        return BodyTerms(
+            x_c=rho * hy.sin(q), y_c=-rho * hy.cos(q),
+            acceleration=acceleration,
+            normal=rho * v * v + g * hy.cos(q),  # N/m = rho phi'^2 + g cos phi
+            sigma=rho,
+            driving=-g * hy.sin(q),
+        )
+
+    def centre(self, body: Body, q):
+        rho = float(self.path_radius(body))
+        q = np.asarray(q, dtype=float)
+        return rho * np.sin(q), -rho * np.cos(q)
+
+    def sigma(self, body: Body, q):
+        return np.full(np.shape(q), float(self.path_radius(body)))
+
+    def describe(self) -> str:
+        return f"a circle R={mpmath.nstr(self.radius, 6)}"
+
+    # -- the circle's own closed forms ---------------------------------------
 
     def path_radius(self, body: Body) -> mpmath.mpf:
         """rho = R - r, radius of the circle traced by the body's centre."""

@@ -1,0 +1,65 @@
+"""Compiled functions of a mode's state, in the run's own number type.
+
+Where the gap is not linear in the coordinates (arc chains, curves), the
+collision callbacks need the gap, its gradient, the law's metric sigma at
+the contact and the gap's acceleration and jerk at the instant of contact
+(see system._contact_terms); the driver needs each body's centre, normal
+force, metric and driving force (checks at the start, outputs). heyoka
+compiles them once per mode shape (``cfunc``), with the mode's runtime
+parameters, so they are evaluated in the same type as the integration.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+
+import heyoka as hy
+import numpy as np
+
+#: Values per contact in a contact function: gap, dgap/dq_i, dgap/dq_j, sigma_i, sigma_j, gap'', gap'''.
+CONTACT_VALUES = 7
+#: Values per body in a body function: x_C, y_C, N/m, sigma, driving force per unit mass, q''.
+BODY_VALUES = 6
+
+_CACHE: "OrderedDict[tuple, object]" = OrderedDict()
+_CACHE_SIZE = 64
+
+
+def _compiled(key, outputs, variables, precision):
+    entry = _CACHE.get(key)
+    if entry is None:
+        options = {} if precision.name == "double" else {"fp_type": precision.fp_type}
+        if precision.name.startswith("mp:"):
+            options["prec"] = precision.bits
+        entry = hy.cfunc(outputs, vars=variables, **options)
+        _CACHE[key] = entry
+        if len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    else:
+        _CACHE.move_to_end(key)
+    return entry
+
+
+def contact_function(system):
+    """``f(state, pars) -> array``: CONTACT_VALUES numbers per watched contact, in order."""
+    outputs = [x for values in system.contact_expressions for x in values]
+    if not outputs:
+        return None
+    return _compiled(("contact", system.shape), outputs, system.variables, system.precision)
+
+
+def body_function(system):
+    """``f(state, pars) -> array``: BODY_VALUES numbers per body (free modes only), or None."""
+    outputs = [x for values in system.body_expressions for x in values]
+    if not outputs:
+        return None
+    return _compiled(("body", system.shape), outputs, system.variables, system.precision)
+
+
+def evaluate(function, state, pars):
+    """Call a compiled function on one state with the mode's parameters (numpy arrays of the run's type)."""
+    state = np.asarray(state)
+    pars = np.asarray(pars)
+    if function.nparams == 0:
+        return function(state)
+    return function(state, pars=pars[: function.nparams])

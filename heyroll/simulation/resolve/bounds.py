@@ -1,0 +1,84 @@
+"""The ends of a piece of track: junction passages and limiter impacts.
+
+Each body on an open track watches the two ends of the piece it is on
+(runtime parameters). At a junction of an arc chain it passes to the next
+piece: its piece parameters switch inside the event callback and the
+integration goes on, so no Taylor step crosses a jump of curvature. At an
+end of the track it hits the limiter, a fixed stop: q' -> -k q' (the
+one-body limit of the collision laws, m_2 -> infinity), with k the scene's
+``limiter_restitution``. Both are recorded as passages (see
+``CollisionLog.passages``).
+
+After either the body sits exactly on an event surface, and heyoka misses a
+root of an event function that starts a step at 0.0: the new piece's far
+bound moves a few ulps out (the piece formulas hold there to the ulp), or
+the body moves a few ulps off the stop.
+"""
+
+from __future__ import annotations
+
+from ..contact_function import BODY_VALUES, evaluate
+from ..events import OPEN_ULPS, below_resolution
+from ..system import piece_bounds
+
+#: Passage kinds, in the passages table.
+PASSAGE_KINDS = ("junction", "limiter_lower", "limiter_upper")
+
+
+def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, function):
+    """The callback of a piece end; ``pieces[k]`` is the piece body k is on (kept per run)."""
+    k = event.body
+    body = scene.bodies[k]
+    track = scene.track
+    block = system.piece_blocks[k]
+    u = system.unit_of[k]
+    nu = system.n_units
+    num = system.precision.number
+    n_pieces = len(track.junctions(body)) + 1
+    bounds = [tuple(num(x) for x in piece_bounds(track, body, p)) for p in range(n_pieces)]
+    values = [[num(x) for x in track.piece_parameters(body, p)] for p in range(n_pieces)]
+    k_lim = num(scene.limiter_restitution)
+    k_float = float(scene.limiter_restitution)
+    eps = system.precision.epsilon
+    upper = event.end == "upper"
+    step = 1 if upper else -1
+    stop = log.stop
+
+    def on_bound(ta, d_sgn):
+        s, pars = holder[0], holder[1]  # pars: the full parameter vector (see driver)
+        t = ta.time
+        q, v = s[u], s[nu + u]
+        margin = OPEN_ULPS * eps * (1 + abs(float(q)))
+        piece = pieces[k]
+        new = piece + step
+        if 0 <= new < n_pieces:
+            pieces[k] = new
+            lo, hi = bounds[new]
+            pars[block.lower] = lo - margin if upper else lo
+            pars[block.lower + 1] = hi if upper else hi + margin
+            pars[block.first:block.first + len(values[new])] = values[new]
+            kept = ta.pars  # heyoka keeps the parameters up to the last one its equations and events use
+            kept[:] = pars[: len(kept)]
+            log.passages.append((t, k, 0, piece, new, q, v, v))
+            return True
+        v_new = -k_lim * v
+        s[nu + u] = v_new
+        s[u] = q - margin if upper else q + margin
+        log.passages.append((t, k, 2 if upper else 1, piece, piece, q, v, v_new))
+        # Resting on the stop: the rebounds left are below the run's resolution
+        # while the track pushes the body onto it (as for a pair, events.below_resolution).
+        if function is not None:
+            acc = evaluate(function, s, pars)[BODY_VALUES * k + 5]
+            away = float(v_new) if not upper else -float(v_new)
+            pushed = float(acc) if not upper else -float(acc)
+            if below_resolution(away, pushed, k_float, float(t), 1 + abs(float(q)), time_scale, eps):
+                stop.reason = "rest"
+                stop.message = (
+                    f"body {k + 1} comes to rest against the {event.end} limiter at t = {float(t):.17g} s "
+                    f"(it rebounds at {abs(float(v_new)):.3g} and the track pushes it back: the impacts "
+                    "accumulate); resting on a limiter is not modelled yet"
+                )
+                return False
+        return True
+
+    return on_bound

@@ -1,0 +1,181 @@
+"""Body-body collisions where the law's map depends on where the bodies touch.
+
+On an arc chain or a curve the gap is the distance between the centres
+minus r_i + r_j, and on a curve the metric sigma = |dC/dq| changes along
+the track. At each contact the callback reads, in the run's own type (a
+compiled function of the state, see :mod:`..contact_function`), the gap's
+gradient (g_i, g_j) and the metrics (sigma_i, sigma_j), and applies the
+scene's law in its own variables u = c q' with inertias M (paper eqs.
+10-11; c = c_1 sigma^p, M = M_1 sigma^p', see :mod:`heyroll.model.laws`):
+
+    u_i+ = u_i - (1 + k) M_j/(M_i + M_j) (u_i - u_j),
+    u_j+ = u_j + (1 + k) M_i/(M_i + M_j) (u_i - u_j).
+
+The bodies approach while the gap rate g_i q_i' + g_j q_j' < 0; an outcome
+that leaves them approaching takes the scene's policy: ``newton`` resolves
+that collision by Newton's law along the gap's gradient with the
+generalized masses G = kappa m sigma^2 (impulse P = -(1 + k) rate /
+(g_i^2/G_i + g_j^2/G_j), q_k'+ = q_k' + P g_k/G_k), flagged 1; ``error``
+stops the run.
+"""
+
+from __future__ import annotations
+
+from ..contact_function import CONTACT_VALUES, evaluate
+from ..events import OPEN_ULPS, RESOLUTION_ULPS, SEPARATION_ULPS, below_resolution, stop_at_max_collisions
+
+
+def law_constants(scene, body, number):
+    """(c_1, M_1, G_1) of a body in the run's type: c = c_1 sigma^p, M = M_1 sigma^p', G = G_1 sigma^2."""
+    v = scene.law.variables(body, 1)
+    return number(v.scale), number(v.inertia), number(body.kappa * body.mass)
+
+
+def make_local_callback(scene, system, number, log, holder, time_scale, function, settle=None):
+    """The collision callback of watched contact ``number``; ``resolve(s, t, pars)`` applies the law alone."""
+    contact = system.contacts[number]
+    pair = contact.pair
+    a, b = contact.unit_a, contact.unit_b
+    nu = system.n_units
+    num = system.precision.number
+    law = scene.law
+    ci1, Mi1, Gi1 = law_constants(scene, scene.bodies[pair.i], num)
+    cj1, Mj1, Gj1 = law_constants(scene, scene.bodies[pair.j], num)
+    ps, pm = law.scale_power, law.inertia_power
+    one_k = num(1 + law.restitution)
+    k = float(law.restitution)
+    eps = system.precision.epsilon
+    tiny = SEPARATION_ULPS * eps
+    strict = scene.on_inconsistent == "error"
+    base = CONTACT_VALUES * number
+    stop = log.stop
+    limit = log.max_collisions
+    records = log.records
+
+    def values(s, pars):
+        return evaluate(function, s, pars)[base:base + CONTACT_VALUES].tolist()
+
+    def resolve(s, t, pars) -> bool:
+        _gap, gi, gj, si, sj = values(s, pars)[:5]
+        vi, vj = s[nu + a], s[nu + b]
+        ci = ci1 * si**ps if ps else ci1
+        cj = cj1 * sj**ps if ps else cj1
+        Mi = Mi1 * si**pm if pm else Mi1
+        Mj = Mj1 * sj**pm if pm else Mj1
+        du = ci * vi - cj * vj
+        total = Mi + Mj
+        vi_new = vi - one_k * Mj / total * du / ci
+        vj_new = vj + one_k * Mi / total * du / cj
+        closing = gi * vi + gj * vj
+        flag = 0
+        if gi * vi_new + gj * vj_new < -tiny * abs(closing):
+            if strict:
+                records.append((t, contact.pair_index, s.tolist(), vi_new, vj_new, 0))
+                s[nu + a], s[nu + b] = vi_new, vj_new
+                stop.reason = "inconsistent"
+                stop.message = (
+                    f"collision {log.count} at t = {float(t):.17g}: bodies {pair.i + 1} and {pair.j + 1} still "
+                    f"approach after the '{law.name}' law (gap rate {float(closing):.3g} -> "
+                    f"{float(gi * vi_new + gj * vj_new):.3g} m/s): the outcome would make them overlap; "
+                    "stopped (collision.on_inconsistent = 'error')"
+                )
+                return False
+            Gi, Gj = Gi1 * si * si, Gj1 * sj * sj
+            impulse = -one_k * closing / (gi * gi / Gi + gj * gj / Gj)
+            vi_new, vj_new = vi + impulse * gi / Gi, vj + impulse * gj / Gj
+            flag = 1
+            log.fallbacks += 1
+        records.append((t, contact.pair_index, s.tolist(), vi_new, vj_new, flag))
+        s[nu + a], s[nu + b] = vi_new, vj_new
+        if limit is not None and log.count >= limit:
+            return stop_at_max_collisions(stop, limit)
+        return True
+
+    def on_collision(ta, d_sgn):
+        s, pars = holder[0], holder[1]
+        t = ta.time
+        if not resolve(s, t, pars):
+            return False
+        if settle is not None and not settle(s, t, (a, b), number):
+            return False
+        # Persistent contact: bounces left below the run's resolution while pressed together.
+        _gap, gi, gj, _si, _sj, acc, jerk = values(s, pars)
+        opening = float(gi * s[nu + a] + gj * s[nu + b])
+        scale = 1 + abs(float(s[a])) + abs(float(s[b]))
+        if below_resolution(opening, float(acc), k, float(t), scale, time_scale, eps, float(jerk)):
+            stop.reason, stop.data = "merge", {"contact": number}
+            return False
+        if len(records) >= log.chunk_size:
+            log.on_full()
+        return True
+
+    on_collision.resolve = resolve
+    return on_collision
+
+
+def local_settler(scene, system, resolvers, log, holder, time_scale, function):
+    """``settle(s, t, units, skip_open=None, skip_merge=())``: pairs touching at one instant.
+
+    As :func:`heyroll.simulation.events.contact_settler`, with the gap, its
+    rate and acceleration read from the compiled contact function: a closing
+    pair collides now (and its neighbours are looked at again), a pressed
+    pair whose bounces are below resolution enters persistent contact
+    (``stop.reason = "merge"``), any other touching pair has its gap opened
+    by 2 OPEN_ULPS ulps by moving the second body along its coordinate
+    (heyoka misses a root of an event function that starts a step at 0).
+    """
+    nu = system.n_units
+    eps = system.precision.epsilon
+    k = float(scene.law.restitution)
+    stop = log.stop
+    by_unit: dict[int, list[int]] = {}
+    for number, c in enumerate(system.contacts):
+        by_unit.setdefault(c.unit_a, []).append(number)
+        by_unit.setdefault(c.unit_b, []).append(number)
+    max_rounds = 64 * system.n_bodies
+
+    def values(s, number):
+        base = CONTACT_VALUES * number
+        return evaluate(function, s, holder[1])[base:base + CONTACT_VALUES].tolist()
+
+    def settle(s, t, units, skip_open=None, skip_merge=()) -> bool:
+        if function is None:
+            return True
+        pending, seen, rounds = list(units), set(units), 0
+        while pending:
+            unit = pending.pop()
+            for number in by_unit.get(unit, ()):
+                c = system.contacts[number]
+                a, b = c.unit_a, c.unit_b
+                gap, gi, gj, _si, _sj, acc, jerk = values(s, number)
+                scale = 1 + abs(float(s[a])) + abs(float(s[b]))
+                if abs(float(gap)) > RESOLUTION_ULPS * eps * scale:
+                    continue
+                va, vb = s[nu + a], s[nu + b]
+                rate = gi * va + gj * vb
+                if rate < -SEPARATION_ULPS * eps * (abs(gi * va) + abs(gj * vb)):
+                    if rounds >= max_rounds:
+                        stop.reason, stop.data = "merge", {"contact": number}
+                        return False
+                    rounds += 1
+                    if not resolvers[number](s, t, holder[1]):
+                        return False
+                    pending += [a, b]
+                    seen.update((a, b))
+                    continue
+                if number not in skip_merge and below_resolution(
+                        max(float(rate), 0.0), float(acc), k, float(t), scale, time_scale, eps, float(jerk)):
+                    stop.reason, stop.data = "merge", {"contact": number}
+                    return False
+        for number in sorted({n for unit in seen for n in by_unit.get(unit, ())}):
+            if number == skip_open:
+                continue
+            c = system.contacts[number]
+            gap, gi, gj = values(s, number)[:3]
+            scale = 1 + abs(float(s[c.unit_a])) + abs(float(s[c.unit_b]))
+            target = OPEN_ULPS * eps * scale
+            if abs(float(gap)) <= target and float(gj) > 0:
+                s[c.unit_b] = s[c.unit_b] + (2 * target - gap) / gj
+        return True
+
+    return settle
