@@ -257,11 +257,12 @@ def test_equilibria_agree_with_an_independent_mpmath_solve(name, omega):
     problem = EquilibriumProblem(track, DISK, Frame.make(omega, "0.1"))
     eq = find_equilibria(problem)
     assert eq
-    roots = equilibrium_roots(track, DISK, omega, "0.1", guesses=[e.q for e in eq])
+    spec = {"type": "curve", "y": PAPER_CURVES[name], "x_min": "-2.1", "x_max": "2.1"}
+    roots = equilibrium_roots(spec, DISK.radius, omega, "0.1", guesses=[e.q for e in eq])
     for e, r in zip(eq, roots):
         assert abs(e.q - float(r)) <= 1e-12 * max(1, abs(e.q))
     # and an independent coarse scan finds no equilibrium the engine missed
-    scan = equilibrium_roots(track, DISK, omega, "0.1", scan=300, domain=("-2.1", "2.1"))
+    scan = equilibrium_roots(spec, DISK.radius, omega, "0.1", scan=300, domain=("-2.1", "2.1"))
     assert all(min(abs(e.q - float(r)) for e in eq) < 1e-10 for r in scan)
 
 

@@ -71,7 +71,8 @@ def equilibria_study() -> tuple[int, float]:
         for omega in ("0", "1.0", "2.0", "3.0", "4.5", "6.0"):
             problem = EquilibriumProblem(track, DISK, Frame.make(omega, "0.1"))
             eq = find_equilibria(problem)
-            ref = equilibrium_roots(track, DISK, omega, "0.1", guesses=[e.q for e in eq])
+            spec = {"type": "curve", "y": y, "x_min": str(track.x_min), "x_max": str(track.x_max)}
+            ref = equilibrium_roots(spec, DISK.radius, omega, "0.1", guesses=[e.q for e in eq])
             for e, r in zip(eq, ref):
                 worst = max(worst, abs(e.q - float(r)))
                 count += 1
