@@ -222,7 +222,7 @@ def _track_warning(log, ev, system):
             full = system.expand(ta.update_d_output(t).tolist())
             log.warnings[body] = (
                 f"body {body + 1}: the normal force of the track changes sign at t = {float(t):.17g} s, "
-                f"{system.coordinate} = {float(full[body]):.6g} (on a one-sided track it would leave it here)"
+                f"{system.coordinate} = {float(full[body]):.6g}: the two-sided track holds it (on a one-sided one it would leave here)"
             )
 
     return record
