@@ -110,8 +110,8 @@ def test_G4_first_integral_eq92_has_the_square_root_over_everything():
     res = simulate(scene)
     x, v = float(res.final_state[0]), float(res.final_state[1])
     F = lambda q: float(track.metric(q, r))  # noqa: E731
-    xc = lambda q: float(track.centre(q, r)[0])  # noqa: E731
-    yc = lambda q: float(track.centre(q, r)[1])  # noqa: E731
+    xc = lambda q: float(track.centre_at(q, r)[0])  # noqa: E731
+    yc = lambda q: float(track.centre_at(q, r)[1])  # noqa: E731
     # J_z = m x_C^2 + const, J_P = kappa m r^2
     rest = omega**2 * (xc(x) ** 2 - xc(x0) ** 2) / (kappa * F(x)) + 2 * G / (kappa * F(x)) * (yc(x0) - yc(x))
     corrected = math.copysign(math.sqrt(v0**2 * F(x0) / F(x) + rest), v)

@@ -76,7 +76,7 @@ class CircleTrack:
         return BodyTerms(
             x_c=rho * hy.sin(q), y_c=-rho * hy.cos(q),
             acceleration=acceleration,
-            normal=rho * v * v + g * hy.cos(q),  # N/m = rho phi'^2 + g cos phi
+            normal=rho * v**2 + g * hy.cos(q),  # N/m = rho phi'^2 + g cos phi; v**2, not v*v: heyoka decomposes the events with the equations, and this form keeps the validated trajectories bit for bit
             sigma=rho,
             driving=-g * hy.sin(q),
         )
