@@ -36,7 +36,7 @@ from heyroll.interfaces.portrait_figures import bifurcation_figure, energy_surfa
 from heyroll.model.bodies import Body
 from heyroll.model.scene import Scene
 from heyroll.model.frame import Frame
-from heyroll.model.tracks import ArcChainTrack, CurveTrack, ThreeArcTrack
+from heyroll.model.tracks import CurveTrack, ThreeArcTrack
 from heyroll.model.scene import RunSettings
 
 DISK = dict(shape="disk", radius="0.1", mass="1")
@@ -62,21 +62,21 @@ def body(spec) -> Body:
     return Body.of_shape(spec["shape"], spec["radius"], mass=spec["mass"])
 
 
-def arcs_scene(name: str) -> PathScene:
+def arcs_scene(name: str) -> Scene:
     p = PARAMETERS[name]
     track = ThreeArcTrack.make(p["R"], p["R0"], p["beta"])
     return Scene.make(track, [body(p["body"])], [p["s"]], [0], limiter_restitution=1, name=(
         f"{name}: three arcs R = {p['R']} m, R0 = {p['R0']} m, beta = {p['beta']}, disk r = {p['body']['radius']} m"))
 
 
-def curve_scene() -> PathScene:
+def curve_scene() -> Scene:
     p = PARAMETERS["fig19"]
     track = CurveTrack.make(p["y"], p["x_min"], p["x_max"])
     return Scene.make(track, [body(p["body"])], [p["x"]], [0], frame=Frame.make(p["omega"], p["axis_x"]),
                           run=RunSettings.make(10), name=f"fig19: y = {p['y']}, Omega = {p['omega']} rad/s, disk r = 0.05 m")
 
 
-def describe(scene: PathScene) -> None:
+def describe(scene: Scene) -> None:
     eq = find_equilibria(EquilibriumProblem(scene.track, scene.bodies[0], scene.frame, float(scene.g)))
     print(f"{scene.name}")
     for e in eq:

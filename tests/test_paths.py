@@ -17,7 +17,6 @@ from heyroll.interfaces.cli import main
 from heyroll.interfaces.scene_file import default_scene, default_scene_text, parse_scene
 from heyroll.model import expression as ex
 from heyroll.model.bodies import Body
-from heyroll.model.scene import Scene
 from heyroll.model.frame import Frame
 from heyroll.model.tracks import ArcChainTrack, CurveTrack, Segment, ThreeArcTrack
 from heyroll.model.tracks.curve import MPMATH

@@ -17,7 +17,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import mpmath
-import numpy as np
 
 from ..model.scene import Scene
 from ..simulation.driver import simulate

@@ -11,33 +11,27 @@ parameters, so they are evaluated in the same type as the integration.
 
 from __future__ import annotations
 
-from collections import OrderedDict
-
 import heyoka as hy
 import numpy as np
+
+from .compiled_cache import CompiledCache
 
 #: Values per contact in a contact function: gap, dgap/dq_i, dgap/dq_j, sigma_i, sigma_j, gap'', gap'''.
 CONTACT_VALUES = 7
 #: Values per body in a body function: x_C, y_C, N/m, sigma, driving force per unit mass, q''.
 BODY_VALUES = 6
 
-_CACHE: "OrderedDict[tuple, object]" = OrderedDict()
-_CACHE_SIZE = 64
+_COMPILED = CompiledCache(64)
 
 
 def _compiled(key, outputs, variables, precision):
-    entry = _CACHE.get(key)
-    if entry is None:
+    def build():
         options = {} if precision.name == "double" else {"fp_type": precision.fp_type}
         if precision.name.startswith("mp:"):
             options["prec"] = precision.bits
-        entry = hy.cfunc(outputs, vars=variables, **options)
-        _CACHE[key] = entry
-        if len(_CACHE) > _CACHE_SIZE:
-            _CACHE.popitem(last=False)
-    else:
-        _CACHE.move_to_end(key)
-    return entry
+        return hy.cfunc(outputs, vars=variables, **options)
+
+    return _COMPILED.get(key, build)
 
 
 def contact_function(system):

@@ -14,7 +14,6 @@ import dataclasses
 import gc
 import math
 import time
-from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -24,7 +23,8 @@ import numpy as np
 
 from ..model.scene import Scene
 from .events import CollisionLog, StopRequest, mode_events, mode_handlers
-from .precision import DOUBLE, Precision
+from .compiled_cache import CompiledCache
+from .precision import Precision
 from .result import SimulationResult, Status
 from .contact_function import BODY_VALUES, body_function, evaluate
 from .system import (
@@ -605,26 +605,20 @@ def _overlap(scene: Scene, precision: Precision, state, where: str) -> str:
 
 #: Integrators already built, by shape (see SceneSystem.shape) and options:
 #: a run reuses one with its own parameters, state and handlers.
-_INTEGRATORS: "OrderedDict[tuple, tuple]" = OrderedDict()
-_CACHE_SIZE = 32
+_INTEGRATORS = CompiledCache(32)
 
 
 def _integrator(system: SceneSystem, options: dict, cooldown):
     """(taylor_adaptive, slots, nt_slots) for ``system``'s shape, built once and reused."""
-    key = (system.shape, repr(options.get("tol")), options["high_accuracy"], repr(cooldown))
-    entry = _INTEGRATORS.get(key)
-    if entry is None:
+
+    def build():
         slots: list = []
         nt_slots: list = []
         events, nt_events = mode_events(system, cooldown, slots, nt_slots)
         ta = hy.taylor_adaptive(
-            system.equations, system.initial_state, t_events=events,
-            nt_events=nt_events, **options,
+            system.equations, system.initial_state, t_events=events, nt_events=nt_events, **options,
         )
-        entry = (ta, slots, nt_slots)
-        _INTEGRATORS[key] = entry
-        if len(_INTEGRATORS) > _CACHE_SIZE:
-            _INTEGRATORS.popitem(last=False)
-    else:
-        _INTEGRATORS.move_to_end(key)
-    return entry
+        return ta, slots, nt_slots
+
+    key = (system.shape, repr(options.get("tol")), options["high_accuracy"], repr(cooldown))
+    return _INTEGRATORS.get(key, build)

@@ -150,6 +150,18 @@ def _local_handlers(scene, system, log, holder, time_scale, pieces):
     return _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, settle)
 
 
+def close_collision(log: CollisionLog, number: int, pressed: bool) -> bool:
+    """The end of every collision callback: a pair left pressed below the run's
+    resolution enters persistent contact (the run stops for a mode change,
+    ``stop.reason = "merge"``); otherwise full chunks of records are handed on."""
+    if pressed:
+        log.stop.reason, log.stop.data = "merge", {"contact": number}
+        return False
+    if len(log.records) >= log.chunk_size:
+        log.on_full()
+    return True
+
+
 def stop_at_max_collisions(stop: StopRequest, limit: int) -> bool:
     """Ask the driver to stop after the limit-th collision; False stops heyoka."""
     stop.reason = "max_collisions"
@@ -508,16 +520,13 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         vi_new, vj_new = (s[vi_index], s[vj_index]) if cascade is not None else (records[-1][3], records[-1][4])
         opening = vj_new - vi_new
         phi_i, phi_j = before[i], before[j]
+        pressed = False
         if opening * opening <= h_bound * (1 + abs(phi_i) + abs(phi_j)) or opening <= t_bound * (abs(t) + time_scale):
             gap_acc = a_i_stiff * sin(phi_i) - a_j_stiff * sin(phi_j)
             gap_jerk = a_i_stiff * cos(phi_i) * vi_new - a_j_stiff * cos(phi_j) * vj_new
             scale = 1 + abs(phi_i) + abs(phi_j)
-            if below_resolution(opening, gap_acc, k, float(t), scale, time_scale, eps, gap_jerk):
-                stop.reason, stop.data = "merge", {"contact": number}
-                return False
-        if len(records) >= log.chunk_size:
-            log.on_full()
-        return True
+            pressed = below_resolution(opening, gap_acc, k, float(t), scale, time_scale, eps, gap_jerk)
+        return close_collision(log, number, pressed)
 
     on_collision.resolve = resolve
     return on_collision
@@ -739,14 +748,10 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
         va_new, vb_new = state[nu + a], state[nu + b]
         gap_acc = unit_acceleration(system, b, psi_b) - unit_acceleration(system, a, psi_a)
         gap_jerk = unit_jerk(system, b, psi_b, vb_new) - unit_jerk(system, a, psi_a, va_new)
-        if below_resolution(
+        pressed = below_resolution(
             vb_new - va_new, gap_acc, k, float(t), 1 + abs(psi_a) + abs(psi_b), time_scale, eps, gap_jerk
-        ):
-            stop.reason, stop.data = "merge", {"contact": number}
-            return False
-        if len(log.records) >= log.chunk_size:
-            log.on_full()
-        return True
+        )
+        return close_collision(log, number, pressed)
 
     on_collision.resolve = resolve
     return on_collision

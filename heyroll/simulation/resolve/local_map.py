@@ -22,7 +22,9 @@ stops the run.
 from __future__ import annotations
 
 from ..contact_function import CONTACT_VALUES, evaluate
-from ..events import OPEN_ULPS, RESOLUTION_ULPS, SEPARATION_ULPS, below_resolution, stop_at_max_collisions
+from ..events import (
+    OPEN_ULPS, RESOLUTION_ULPS, SEPARATION_ULPS, below_resolution, close_collision, stop_at_max_collisions,
+)
 
 
 def law_constants(scene, body, number):
@@ -102,12 +104,8 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         _gap, gi, gj, _si, _sj, acc, jerk = values(s, pars)
         opening = float(gi * s[nu + a] + gj * s[nu + b])
         scale = 1 + abs(float(s[a])) + abs(float(s[b]))
-        if below_resolution(opening, float(acc), k, float(t), scale, time_scale, eps, float(jerk)):
-            stop.reason, stop.data = "merge", {"contact": number}
-            return False
-        if len(records) >= log.chunk_size:
-            log.on_full()
-        return True
+        return close_collision(log, number,
+                               below_resolution(opening, float(acc), k, float(t), scale, time_scale, eps, float(jerk)))
 
     on_collision.resolve = resolve
     return on_collision
