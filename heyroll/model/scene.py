@@ -324,6 +324,29 @@ class Scene:
                 mpmath.sin,
             )
 
+    def height_bound(self, n: int):
+        """The highest the centre of body ``n`` (0-based) can rise (m) on an open track, or None.
+
+        In a fixed plane, with a law that never creates mechanical energy and
+        limiters with restitution <= 1, the total energy E never grows: body n
+        can reach a height y only if m_n g y <= E - sum over the others of
+        m_j g (their lowest centre height). None where that does not hold or
+        the track gives no lowest height (the events are then all watched).
+        """
+        track = self.track
+        if self.frame.rotating or not hasattr(track, "lowest_centre") or not track.constant_metric:
+            return None
+        if self.limiter_restitution > 1 or self.law.restitution > 1:
+            return None
+        one = mpmath.mpf(1)
+        bodies = self.bodies
+        if not all(conserves_mechanical_energy_bound(self.law, bodies[k], bodies[k + 1], one, one)
+                   for k in range(len(bodies) - 1)):
+            return None
+        with workprec():
+            others = mpmath.fsum(b.mass * self.g * track.lowest_centre(b) for k, b in enumerate(bodies) if k != n)
+            return float((self.total_energy() - others) / (bodies[n].mass * self.g))
+
     def total_energy(self):
         with workprec():
             return mpmath.fsum(self.body_energy(n) for n in range(len(self.bodies)))

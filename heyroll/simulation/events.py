@@ -127,6 +127,7 @@ def _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, se
         function = body_function(system)
         handlers += [make_bound_callback(scene, system, ev, log, holder, pieces, time_scale, function)
                      for ev in system.bound_events]
+    handlers += [_stopper(log, "release", {"bodies": (k,)}) for k in system.release_events]
     handlers += [_track_stopper(log, ev, holder, system) for ev in system.track_events if ev.terminal]
     handlers += [_overlap_stopper(log, number, holder, system) for number in range(len(system.contacts))]
     warnings = [_track_warning(log, ev, system) for ev in system.track_events if not ev.terminal]
@@ -209,7 +210,9 @@ def mode_events(system: SceneSystem, cooldown, slots: list, nt_slots: list) -> t
         hy.t_event(x, callback=forward(n_before + n), direction=negative, cooldown=cooldown, **options)
         for n, x in enumerate(system.bound_expressions)
     ]
-    expressions = [x for x, ev in zip(system.track_expressions, system.track_events) if ev.terminal]
+    # A unit resting on a limiter is released where the track's forces pull a member away.
+    expressions = list(system.release_expressions)
+    expressions += [x for x, ev in zip(system.track_expressions, system.track_events) if ev.terminal]
     expressions += list(system.guard_expressions)
     n_before += len(system.bound_expressions)
     events += [

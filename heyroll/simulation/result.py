@@ -21,7 +21,6 @@ class Status(str, Enum):
 
     COMPLETED = "completed"
     MAX_COLLISIONS = "max_collisions"
-    CONTACT = "contact"
     INCONSISTENT = "inconsistent_collision"
     INTERRUPTED = "interrupted"
     LEFT_TRACK = "left_track"
@@ -45,7 +44,6 @@ class Status(str, Enum):
 _MEANINGS = {
     Status.COMPLETED: "reached t_end",
     Status.MAX_COLLISIONS: "stopped after the scene's or the run's max_collisions",
-    Status.CONTACT: "bodies stay pressed together (or on a limiter) where persistent contact is not modelled yet",
     Status.INCONSISTENT: "the law's outcome would leave two bodies approaching (on_inconsistent = 'error')",
     Status.INTERRUPTED: "stopped by Ctrl-C or SIGTERM; the table holds every collision before the stop",
     Status.LEFT_TRACK: "a body would leave a one-sided track (its normal force reached 0)",

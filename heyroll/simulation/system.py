@@ -62,10 +62,15 @@ def overlap_tolerance(phi_j) -> float:
 
 @dataclass(frozen=True)
 class Unit:
-    """Bodies moving together (0-based indices, clockwise first) and their offsets o_k."""
+    """Bodies moving together (0-based indices, clockwise first) and their offsets o_k.
+
+    ``pinned`` ('lower' or 'upper', open tracks): the unit rests against that
+    limiter, held there by the track's forces, until they pull it away.
+    """
 
     members: tuple[int, ...]
-    offsets: tuple  # mpf, o_k relative to the first member
+    offsets: tuple  # mpf, o_k relative to the first member (0 where the gap is not linear)
+    pinned: str = ""
 
     @property
     def is_cluster(self) -> bool:
@@ -166,6 +171,26 @@ class SceneSystem:
     linear_gap: bool = True
     #: Which bodies are particles (r = 0): a curve's equations and a particle pair's gap differ for them.
     particles: tuple = ()
+    #: Per link of a cluster where the gap is not linear: [gap, dgap/dq_i, dgap/dq_j] (projections onto the contact).
+    link_terms: list = field(default_factory=list)
+    #: Per pinned unit: its members' free accelerations (the unit is released where one pulls away).
+    release_events: tuple = ()
+    release_expressions: list = field(default_factory=list)
+    #: kappa m of each body (exact): M_k = kappa m sigma^2 is its generalized mass on a path track.
+    rolling_mass: tuple = ()
+
+    @property
+    def per_body(self) -> bool:
+        """The state holds every body's own q, q' (tracks whose gap is not linear: contacts are constraints)."""
+        return not self.linear_gap
+
+    @property
+    def n_coordinates(self) -> int:
+        return self.n_bodies if self.per_body else self.n_units
+
+    def state_index(self, body: int) -> int:
+        """Where body ``body``'s coordinate sits in this mode's state (its rate: + n_coordinates)."""
+        return body if self.per_body else self.unit_of[body]
 
     @property
     def n_units(self) -> int:
@@ -183,6 +208,7 @@ class SceneSystem:
             tuple((l.unit, l.position) for l in self.links),
             tuple((e.body, e.kind, e.terminal) for e in self.track_events),
             self.precision.name,
+            tuple((u.members, u.pinned) for u in self.units if u.pinned),
         )
 
     @property
@@ -198,7 +224,7 @@ class SceneSystem:
 
     def expand(self, unit_state) -> list:
         """Full state [phi_1..phi_N, dphi_1..dphi_N] from a unit state."""
-        if not any(u.is_cluster for u in self.units):
+        if self.per_body or not any(u.is_cluster for u in self.units):
             return list(unit_state)
         nu = self.n_units
         phi = [0.0] * self.n_bodies
@@ -213,17 +239,34 @@ class SceneSystem:
     def reduce(self, full_state) -> list:
         """Unit state from a full state (first member's angle and rate)."""
         n = self.n_bodies
+        if self.per_body:
+            return list(full_state)
         psi = [full_state[u.members[0]] for u in self.units]
         dpsi = [full_state[n + u.members[0]] for u in self.units]
         return psi + dpsi
 
 
+def link_bodies(system: SceneSystem, link: ContactLink) -> tuple[int, int]:
+    """The two bodies (0-based) of a persistent contact."""
+    members = system.units[link.unit].members
+    return members[link.position], members[link.position + 1]
+
+
 def singleton_units(n: int) -> tuple[Unit, ...]:
-    return tuple(Unit(members=(k,), offsets=(mpmath.mpf(0),)) for k in range(n))
+    return singleton_units_of(range(n))
 
 
-def cluster_unit(scene: Scene, members: tuple[int, ...]) -> Unit:
-    """A cluster of consecutive touching bodies, offsets accumulated from the pairs' beta."""
+def singleton_units_of(bodies) -> tuple[Unit, ...]:
+    return tuple(Unit(members=(k,), offsets=(mpmath.mpf(0),)) for k in bodies)
+
+
+def cluster_unit(scene: Scene, members: tuple[int, ...], pinned: str = "") -> Unit:
+    """A cluster of consecutive touching bodies, offsets accumulated from the pairs' beta.
+
+    Where the gap is not linear the members keep their own coordinates (offsets 0).
+    """
+    if not scene.track.linear_gap:
+        return Unit(members=tuple(members), offsets=(mpmath.mpf(0),) * len(members), pinned=pinned)
     offsets = [mpmath.mpf(0)]
     with workprec():
         for a, b in zip(members, members[1:]):
@@ -267,8 +310,16 @@ def build_system(
     nu = len(units)
     allowed = None if pairs is None else {id(p) for p in pairs}
     track, g = scene.track, scene.g
-    name = track.coordinate if all(not u.is_cluster for u in units) else "psi"
-    psi, dpsi = _vars(name, nu), _vars(f"d{name}", nu)
+    per_body = not track.linear_gap
+    unit_of = [0] * n
+    for u, unit in enumerate(units):
+        for k in unit.members:
+            unit_of[k] = u
+    # Where the gap is not linear every body keeps its own coordinate and a contact is a
+    # constraint (see _constrained_accelerations); on the circle a cluster is one rigid unit.
+    nc = n if per_body else nu
+    name = track.coordinate if per_body or all(not u.is_cluster for u in units) else "psi"
+    psi, dpsi = _vars(name, nc), _vars(f"d{name}", nc)
     num = precision.number
     params: list = []
 
@@ -298,21 +349,29 @@ def build_system(
 
     G = [track.generalized_mass(b) for b in scene.bodies] if track.linear_gap else []
     W = [track.weight_moment(b, g) for b in scene.bodies] if track.linear_gap else []
-    equations = [(psi[u], dpsi[u]) for u in range(nu)]
     accelerations, terms = [], [None] * n
+    links, link_exprs, link_terms = [], [], []
     with workprec():
-        for u, unit in enumerate(units):
-            if not unit.is_cluster:
-                k = unit.members[0]
-                terms[k] = body_terms(k, psi[u], dpsi[u])
-                acc = terms[k].acceleration
-            else:
-                total = mpmath.fsum(G[k] for k in unit.members)
-                acc = hy.sum([
-                    -par(W[k] / total) * hy.sin(psi[u] + par(o)) for k, o in zip(unit.members, unit.offsets)
-                ])
-            accelerations.append(acc)
-            equations.append((dpsi[u], acc))
+        if per_body:
+            terms = [body_terms(k, psi[k], dpsi[k]) for k in range(n)]
+            accelerations, links, link_exprs, link_terms = _constrained_accelerations(
+                scene, units, terms, psi, dpsi, par, events)
+        else:
+            for u, unit in enumerate(units):
+                if not unit.is_cluster:
+                    k = unit.members[0]
+                    terms[k] = body_terms(k, psi[u], dpsi[u])
+                    acc = terms[k].acceleration
+                else:
+                    total = mpmath.fsum(G[k] for k in unit.members)
+                    acc = hy.sum([
+                        -par(W[k] / total) * hy.sin(psi[u] + par(o)) for k, o in zip(unit.members, unit.offsets)
+                    ])
+                accelerations.append(acc)
+    equations = [(psi[c], dpsi[c]) for c in range(nc)] + [(dpsi[c], accelerations[c]) for c in range(nc)]
+
+    def at(k):  # a body's place in the state
+        return k if per_body else unit_of[k]
 
     contacts, gaps, guards, contact_exprs = [], [], [], []
     if nu > 1 and events:
@@ -332,18 +391,29 @@ def build_system(
                 with workprec():
                     constant = pair.offset - pair.beta - units[a].offsets[-1]
                 gaps.append(psi[b] - psi[a] + par(constant))
+                # (1 + psi_b^2): measured +16 % per collision on the two-ball hot path,
+                # against +10 % for a constant tolerance that large angles would trip.
+                guards.append(gaps[-1] + par(OVERLAP_FLOOR) * (1 + psi[b] * psi[b]))
             else:
-                gap = _gap(scene, i, j, terms[i], terms[j], psi[a], psi[b], par)
-                gaps.append(gap)
-                contact_exprs.append(_contact_terms(gap, terms[i], terms[j], psi[a], psi[b], dpsi[a], dpsi[b],
-                                                    accelerations[a], accelerations[b]))
-            # (1 + psi_b^2): measured +16 % per collision on the two-ball hot path,
-            # against +10 % for a constant tolerance that large angles would trip.
-            guards.append(gaps[-1] + par(OVERLAP_FLOOR) * (1 + psi[b] * psi[b]))
+                gap = _gap(scene, i, j, terms[i], terms[j], psi[i], psi[j], par)
+                contact_exprs.append(_contact_terms(gap, terms[i], terms[j], psi[i], psi[j], dpsi[i], dpsi[j],
+                                                    accelerations[i], accelerations[j]))
+                # The event watches |C_j - C_i|^2 - d^2, same root and direction as the gap: heyoka
+                # sizes its steps on the event functions too, and the square root's branch points
+                # (|D|/|D'| away in complex time) halved the steps as bodies closed in (measured:
+                # 384k steps against 229k on one arc equal to the default circle).
+                d = scene.bodies[i].radius + scene.bodies[j].radius
+                if d == 0:
+                    gaps.append(gap)
+                    guards.append(gap + par(OVERLAP_FLOOR) * (1 + psi[j] * psi[j]))
+                else:
+                    dx, dy = terms[j].x_c - terms[i].x_c, terms[j].y_c - terms[i].y_c
+                    gaps.append(hy.sum([dx * dx, dy * dy]) - par(d * d))
+                    # |D|^2 - d^2 ~ 2 d gap: the same overlap tolerance in metres (q is bounded on an open track).
+                    guards.append(gaps[-1] + par(2 * d * OVERLAP_FLOOR) * (1 + psi[j] * psi[j]))
 
-    links, link_exprs = [], []
     for u, unit in enumerate(units):
-        if not unit.is_cluster or not events:
+        if per_body or not unit.is_cluster or not events:
             continue
         partial = []
         for m, (k, o) in enumerate(zip(unit.members[:-1], unit.offsets[:-1])):
@@ -352,33 +422,43 @@ def build_system(
             link_exprs.append(hy.sum(list(partial)))
 
     bound_events, bound_exprs = [], []
+    release_events, release_exprs = [], []
     if blocks and events:
-        for u, unit in enumerate(units):
-            k = unit.members[0]
+        for k in range(n):
+            unit = units[unit_of[k]]
+            if unit.pinned:
+                # Resting on a stop: released where the track's forces pull a member away from it.
+                release_events.append(k)
+                acc = terms[k].acceleration
+                release_exprs.append(-acc if unit.pinned == "lower" else acc)
+                continue
             chain = len(track.junctions(scene.bodies[k])) > 0
-            # Without junctions only the outermost bodies can reach a limiter.
-            if chain or k == 0:
+            # Without junctions only the outermost bodies can reach a limiter, and only
+            # if the energy can take them to its height.
+            if chain or (k == 0 and _can_reach_end(scene, k, 0)):
                 bound_events.append(BoundEvent(k, "lower"))
-                bound_exprs.append(psi[u] - hy.par[blocks[k].lower])
-            if chain or k == n - 1:
+                bound_exprs.append(psi[at(k)] - hy.par[blocks[k].lower])
+            if chain or (k == n - 1 and _can_reach_end(scene, k, 1)):
                 bound_events.append(BoundEvent(k, "upper"))
-                bound_exprs.append(hy.par[blocks[k].lower + 1] - psi[u])
+                bound_exprs.append(hy.par[blocks[k].lower + 1] - psi[at(k)])
 
-    track_events, track_exprs = _track_events(scene, units, psi, dpsi, par, body_terms, terms) if events else ([], [])
-    unit_of = [0] * n
-    for u, unit in enumerate(units):
-        for k in unit.members:
-            unit_of[k] = u
+    track_units = singleton_units(n) if per_body else units
+    track_events, track_exprs = (_track_events(scene, track_units, psi, dpsi, par, body_terms, terms)
+                                 if events else ([], []))
     start = [num(x) for x in scene.q]
     rates = [num(x) for x in scene.dq]
-    body_exprs = [[t.x_c, t.y_c, t.normal, t.sigma, t.driving, t.acceleration] for t in terms] if nu == n else []
+    if per_body:
+        body_exprs = [[t.x_c, t.y_c, t.normal, t.sigma, t.driving, a] for t, a in zip(terms, accelerations)]
+    else:
+        body_exprs = [[t.x_c, t.y_c, t.normal, t.sigma, t.driving, t.acceleration] for t in terms] if nu == n else []
     if not events:
         # The bare equations: only the parameters they read (a caller passes them to heyoka,
         # which wants exactly those up to the last one used).
         used = [int(m) for eq in equations for m in re.findall(r"\bp(\d+)\b", str(eq[1]))]
         del params[max(used, default=-1) + 1:]
     return SceneSystem(
-        initial_state=[start[u.members[0]] for u in units] + [rates[u.members[0]] for u in units],
+        initial_state=(start + rates if per_body
+                       else [start[u.members[0]] for u in units] + [rates[u.members[0]] for u in units]),
         equations=equations,
         parameters=params,
         units=units,
@@ -404,6 +484,10 @@ def build_system(
         track_shape=track_shape(track, scene.frame),
         linear_gap=track.linear_gap,
         particles=tuple(b.is_particle for b in scene.bodies),
+        link_terms=link_terms,
+        rolling_mass=tuple(b.kappa * b.mass for b in scene.bodies),
+        release_events=tuple(release_events),
+        release_expressions=release_exprs,
     )
 
 
@@ -452,6 +536,112 @@ def _contact_terms(gap, ti, tj, qi, qj, vi, vj, ai, aj) -> list:
     return [gap, gi, gj, ti.sigma, tj.sigma, acc, d_dt(acc)]
 
 
+def _constrained_accelerations(scene, units, terms, q, v, par, events):
+    """Each body's q'' with the contacts inside clusters as holonomic constraints (tracks whose gap is not linear).
+
+    A cluster's links l (members m_l, m_l+1) keep their gap g_l = |C_i - C_j| - r_i - r_j
+    at zero, written h_l = |C_j - C_i|^2 - (r_i + r_j)^2 = 0 (see _link_constraint). With the generalized masses M_k = kappa_k m_k sigma_k^2 (d2T/dq'^2) and
+    Lagrange multipliers lambda_l on the gaps (ideal contacts: no work),
+
+        M_k q_k'' = M_k a_k + sum_l lambda_l dg_l/dq_k,
+
+    a_k the body's own acceleration (lambda_l on h_l). h_l'' = 0 is a tridiagonal linear system for
+    the lambdas (solved here symbolically, Thomas' algorithm); lambda_l > 0 is a
+    compressive contact, and the cluster splits where it reaches 0 (the link
+    event). The drift of the constraint under round-off is damped (Baumgarte):
+    h'' + 2 alpha h' + alpha^2 h = 0, alpha the inverse of the motion's time
+    scale sqrt(L/g); the exact constrained motion (h = h' = 0) is unchanged.
+    Pinned units (resting on a limiter) do not move. Returns (accelerations,
+    links, their lambda expressions, their [gap, dg/dq_i, dg/dq_j]).
+    """
+    track = scene.track
+    acc = [t.acceleration for t in terms]
+    out = list(acc)
+    links, lambdas, link_terms = [], [], []
+    length = max(float(hi - lo) for lo, hi in (track.domain(b) for b in scene.bodies))
+    alpha = par(math.sqrt(float(scene.g) / max(length, 1e-300)))
+    for u, unit in enumerate(units):
+        if unit.pinned:
+            for k in unit.members:
+                out[k] = par(0)
+            continue
+        if not unit.is_cluster:
+            continue
+        members = unit.members
+        M = [par(scene.bodies[k].kappa * scene.bodies[k].mass) * terms[k].sigma * terms[k].sigma for k in members]
+        grads, rhs = [], []
+        for i, j in zip(members, members[1:]):
+            h, hi, hj, h_rate, h_free = _link_constraint(scene, i, j, terms, q, v, acc, par)
+            grads.append((hi, hj))
+            rhs.append(-(h_free + 2 * alpha * h_rate + alpha * alpha * h))
+            link_terms.append(_link_gap(scene, i, j, terms, q, par))
+            links.append(ContactLink(unit=u, position=len(grads) - 1, pair_index=scene_pair_index(scene, i, j)))
+        L = len(grads)
+        diag = [grads[l][0] * grads[l][0] / M[l] + grads[l][1] * grads[l][1] / M[l + 1] for l in range(L)]
+        sub = [None] + [grads[l][0] * grads[l - 1][1] / M[l] for l in range(1, L)]
+        sup = [grads[l][1] * grads[l + 1][0] / M[l + 1] for l in range(L - 1)] + [None]
+        cp, dp = [None] * L, [None] * L
+        for l in range(L):
+            den = diag[l] if l == 0 else diag[l] - sub[l] * cp[l - 1]
+            if l < L - 1:
+                cp[l] = sup[l] / den
+            dp[l] = rhs[l] / den if l == 0 else (rhs[l] - sub[l] * dp[l - 1]) / den
+        lam = [None] * L
+        lam[L - 1] = dp[L - 1]
+        for l in range(L - 2, -1, -1):
+            lam[l] = dp[l] - cp[l] * lam[l + 1]
+        for p, k in enumerate(members):
+            push = []
+            if p > 0:
+                push.append(lam[p - 1] * grads[p - 1][1])
+            if p < L:
+                push.append(lam[p] * grads[p][0])
+            out[k] = acc[k] + hy.sum(push) / M[p]
+        lambdas += lam
+    if not events:
+        links, lambdas = [], []
+    return out, links, lambdas, link_terms
+
+
+def _centre_derivatives(term, q):
+    """(C', C'') of a body's centre along its coordinate, as expression pairs."""
+    dx, dy = hy.diff(term.x_c, q), hy.diff(term.y_c, q)
+    return (dx, dy), (hy.diff(dx, q), hy.diff(dy, q))
+
+
+def _link_constraint(scene, i, j, terms, q, v, acc, par):
+    """A contact kept closed: h = |C_j - C_i|^2 - (r_i + r_j)^2 (no square root), its gradient,
+    its rate and its second derivative under the bodies' own accelerations.
+
+    With D = C_j - C_i: h' = 2 D.D', h'' = 2 (D'.D' + D.D''), D' = C_j' q_j' - C_i' q_i',
+    D'' = C_j'' q_j'^2 + C_j' q_j'' - (i). Two particles (r = 0) keep q_j - q_i = 0.
+    """
+    d = scene.bodies[i].radius + scene.bodies[j].radius
+    if d == 0:
+        return q[j] - q[i], -1.0, 1.0, v[j] - v[i], acc[j] - acc[i]
+    (xi1, yi1), (xi2, yi2) = _centre_derivatives(terms[i], q[i])
+    (xj1, yj1), (xj2, yj2) = _centre_derivatives(terms[j], q[j])
+    Dx, Dy = terms[j].x_c - terms[i].x_c, terms[j].y_c - terms[i].y_c
+    Vx, Vy = xj1 * v[j] - xi1 * v[i], yj1 * v[j] - yi1 * v[i]
+    Ax = xj2 * v[j] * v[j] + xj1 * acc[j] - xi2 * v[i] * v[i] - xi1 * acc[i]
+    Ay = yj2 * v[j] * v[j] + yj1 * acc[j] - yi2 * v[i] * v[i] - yi1 * acc[i]
+    h = Dx * Dx + Dy * Dy - par(d * d)
+    hi, hj = -2.0 * (Dx * xi1 + Dy * yi1), 2.0 * (Dx * xj1 + Dy * yj1)
+    return h, hi, hj, 2.0 * (Dx * Vx + Dy * Vy), 2.0 * (Vx * Vx + Vy * Vy + Dx * Ax + Dy * Ay)
+
+
+def _link_gap(scene, i, j, terms, q, par) -> list:
+    """[gap, dgap/dq_i, dgap/dq_j] of a contact (m): gap = |D| - r_i - r_j, gradient -n.C_i', n.C_j'."""
+    d = scene.bodies[i].radius + scene.bodies[j].radius
+    if d == 0:
+        return [q[j] - q[i], hy.expression(-1.0), hy.expression(1.0)]
+    Dx, Dy = terms[j].x_c - terms[i].x_c, terms[j].y_c - terms[i].y_c
+    dist = hy.sqrt(Dx * Dx + Dy * Dy)
+    (xi1, yi1), _ = _centre_derivatives(terms[i], q[i])
+    (xj1, yj1), _ = _centre_derivatives(terms[j], q[j])
+    return [dist - par(d), -(Dx * xi1 + Dy * yi1) / dist, (Dx * xj1 + Dy * yj1) / dist]
+
+
 def _vars(prefix: str, n: int) -> list:
     names = [f"{prefix}_{k + 1}" for k in range(n)]
     made = hy.make_vars(*names)
@@ -479,8 +669,13 @@ def _track_events(scene: Scene, units, psi, dpsi, par, body_terms, free_terms):
     for u, unit in enumerate(units):
         for k, o in zip(unit.members, unit.offsets):
             body = scene.bodies[k]
-            # Above the horizontal diameter the body needs W (1 - cos phi) > W of energy.
-            reach_top_half = not bounded or energy >= tr.weight_moment(body, scene.g) * (1 - mpmath.mpf(10) ** -9)
+            if bounded:
+                # Above the horizontal diameter the body needs W (1 - cos phi) > W of energy.
+                reach_top_half = energy >= tr.weight_moment(body, scene.g) * (1 - mpmath.mpf(10) ** -9)
+            else:
+                # An open track in a fixed plane: where its centre can rise to, can N vanish?
+                height = scene.height_bound(k)
+                reach_top_half = height is None or not tr.holds_below(body, _with_margin(height))
             slips = mu is not None and body.kappa > 1
             if not (reach_top_half or slips):
                 continue
@@ -495,6 +690,21 @@ def _track_events(scene: Scene, units, psi, dpsi, par, body_terms, free_terms):
                 events.append(TrackEvent(body=k, kind="slip"))
                 exprs.append(par(mu) * terms.normal + friction)
     return events, exprs
+
+
+def _with_margin(height: float) -> float:
+    """A height bound widened against rounding (m)."""
+    return height + 1e-9 * (1 + abs(height))
+
+
+def _can_reach_end(scene: Scene, k: int, end: int) -> bool:
+    """Whether body k's energy can take it to the lower (0) or upper (1) end of the track."""
+    height = scene.height_bound(k)
+    if height is None:
+        return True
+    body = scene.bodies[k]
+    q = float(scene.track.domain(body)[end])
+    return float(scene.track.centre(body, [q])[1][0]) <= _with_margin(height)
 
 
 def gap_value(system: SceneSystem, number: int, unit_state) -> float:

@@ -10,6 +10,7 @@ at 1e-12 rad; heyoka's quad and MPFR integrators also take no float state).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import heyoka as hy
@@ -28,11 +29,14 @@ class Branch:
     states: np.ndarray
 
 
-def _units(scene, clusters) -> tuple[Unit, ...]:
-    """Units of a mode given its clusters (1-based body numbers)."""
+def _units(scene, mode) -> tuple[Unit, ...]:
+    """Units of a mode given its (clusters, pinned units) (1-based body numbers)."""
+    clusters, pinned = mode
+    held = dict(pinned)
     in_cluster = {k - 1 for c in clusters for k in c}
-    units = [cluster_unit(scene, tuple(k - 1 for k in c)) for c in clusters]
-    units += [u for u in singleton_units(len(scene.bodies)) if u.members[0] not in in_cluster]
+    units = [cluster_unit(scene, tuple(k - 1 for k in c), pinned=held.get(c, "")) for c in clusters]
+    units += [dataclasses.replace(u, pinned=held.get((u.members[0] + 1,), ""))
+              for u in singleton_units(len(scene.bodies)) if u.members[0] not in in_cluster]
     return tuple(sorted(units, key=lambda u: u.members[0]))
 
 
@@ -44,9 +48,9 @@ def sample_branches(result: SimulationResult, *, max_branches: int | None = None
     the collisions kept in memory, for a streamed run).
     """
     scene = result.scene
-    modes = [(float(m.t), np.asarray(m.state, dtype=float), m.clusters) for m in result.mode_changes]
+    modes = [(float(m.t), np.asarray(m.state, dtype=float), (m.clusters, m.pinned)) for m in result.mode_changes]
     if not modes:
-        modes = [(0.0, np.asarray(result.initial_state, dtype=float), ())]
+        modes = [(0.0, np.asarray(result.initial_state, dtype=float), ((), ()))]
     clusters_at = sorted(modes, key=lambda b: b[0])
     # At equal times a mode change comes after the collision that caused it
     # (the branch then starts from the merged state); the initial mode first.

@@ -11,6 +11,7 @@ left normal.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import ClassVar
@@ -234,6 +235,31 @@ class ArcChainTrack:
         return BodyTerms(x_c=x_c, y_c=y_c, acceleration=acc, normal=normal, sigma=hy.expression(1.0),
                          driving=driving)
 
+    def lowest_centre(self, body: Body) -> float:
+        """The lowest height the body's centre has anywhere on the track (m), for energy bounds."""
+        return min(_piece_lowest(p) for p in self.pieces(body))
+
+    def holds_below(self, body: Body, height: float) -> bool:
+        """Whether, in a fixed plane, the normal force N/m = c s'^2 + g cos(alpha) stays > 0
+        wherever the body's centre is at or below ``height`` (m), at any speed.
+
+        A line needs cos(alpha) > 0 (not past vertical); a concave arc (c > 0,
+        y_C = E - B cos(alpha)) has cos(alpha) > 0 wherever y_C < E, its
+        centre's height; a convex arc (c < 0) can always be left at speed.
+        Pieces entirely above ``height`` do not count.
+        """
+        for p in self.pieces(body):
+            if _piece_lowest(p) > height:
+                continue
+            if p.c < 0:
+                return False
+            if p.c == 0:
+                if math.cos(p.alpha0) <= 0:
+                    return False
+            elif height >= p.E and _least_cos(p.alpha(p.s0), p.alpha(p.s1)) <= 0:
+                return False
+        return True
+
     def centre(self, body: Body, q):
         pieces = self.pieces(body)
         q = np.asarray(q, dtype=float)
@@ -289,6 +315,26 @@ class ArcChainTrack:
 def _pieces(track: ArcChainTrack, body: Body, exact: bool) -> tuple[PathPiece, ...]:
     # pure function of frozen inputs: the geometry is computed once per (track, body)
     return track._build_pieces(body, exact)
+
+
+def _piece_lowest(p: PathPiece) -> float:
+    """Lowest centre height on a piece: its ends, and on an arc the bottoms of its circle inside it."""
+    heights = [p.centre(p.s0, math)[1], p.centre(p.s1, math)[1]]
+    if p.c != 0:
+        a0, a1 = sorted((p.alpha(p.s0), p.alpha(p.s1)))
+        # y = E - B cos(alpha) is lowest where cos(alpha) = sign(B): alpha = 0 or pi (mod 2 pi).
+        base = 0.0 if p.B > 0 else math.pi
+        k = math.ceil((a0 - base) / (2 * math.pi))
+        if base + 2 * math.pi * k <= a1:
+            heights.append(p.E - abs(p.B))
+    return min(heights)
+
+
+def _least_cos(a0: float, a1: float) -> float:
+    a0, a1 = sorted((a0, a1))
+    if math.pi + 2 * math.pi * math.ceil((a0 - math.pi) / (2 * math.pi)) <= a1:
+        return -1.0
+    return min(math.cos(a0), math.cos(a1))
 
 
 def _arc_centre(seg: Segment, px, py):

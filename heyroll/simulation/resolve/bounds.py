@@ -9,6 +9,11 @@ one-body limit of the collision laws, m_2 -> infinity), with k the scene's
 ``limiter_restitution``. Both are recorded as passages (see
 ``CollisionLog.passages``).
 
+A body whose rebounds on a stop fall below the run's resolution while the
+track pushes it there comes to rest on it (the driver pins its unit, see
+:class:`heyroll.simulation.system.Unit`); a member of a cluster that hits a
+stop releases its cluster, whose contacts are then resolved as collisions.
+
 After either the body sits exactly on an event surface, and heyoka misses a
 root of an event function that starts a step at 0.0: the new piece's far
 bound moves a few ulps out (the piece formulas hold there to the ulp), or
@@ -31,8 +36,9 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
     body = scene.bodies[k]
     track = scene.track
     block = system.piece_blocks[k]
-    u = system.unit_of[k]
-    nu = system.n_units
+    u = system.state_index(k)
+    nu = system.n_coordinates
+    in_cluster = system.units[system.unit_of[k]].is_cluster
     num = system.precision.number
     n_pieces = len(track.junctions(body)) + 1
     bounds = [tuple(num(x) for x in piece_bounds(track, body, p)) for p in range(n_pieces)]
@@ -72,13 +78,13 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
             away = float(v_new) if not upper else -float(v_new)
             pushed = float(acc) if not upper else -float(acc)
             if below_resolution(away, pushed, k_float, float(t), 1 + abs(float(q)), time_scale, eps):
-                stop.reason = "rest"
-                stop.message = (
-                    f"body {k + 1} comes to rest against the {event.end} limiter at t = {float(t):.17g} s "
-                    f"(it rebounds at {abs(float(v_new)):.3g} and the track pushes it back: the impacts "
-                    "accumulate); resting on a limiter is not modelled yet"
-                )
+                # The driver pins its unit on the stop (system.Unit.pinned) until the forces pull it away.
+                stop.reason, stop.data = "rest", {"body": k, "end": event.end}
                 return False
+        if in_cluster:
+            # The rest of its cluster runs on into it: the contacts are resolved as collisions.
+            stop.reason, stop.data = "release", {"bodies": (k,)}
+            return False
         return True
 
     return on_bound

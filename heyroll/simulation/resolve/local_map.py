@@ -22,6 +22,7 @@ stops the run.
 from __future__ import annotations
 
 from ..contact_function import CONTACT_VALUES, evaluate
+from .constraints import cluster_impact
 from ..events import (
     OPEN_ULPS, RESOLUTION_ULPS, SEPARATION_ULPS, below_resolution, close_collision, stop_at_max_collisions,
 )
@@ -37,8 +38,13 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
     """The collision callback of watched contact ``number``; ``resolve(s, t, pars)`` applies the law alone."""
     contact = system.contacts[number]
     pair = contact.pair
-    a, b = contact.unit_a, contact.unit_b
-    nu = system.n_units
+    a, b = system.state_index(pair.i), system.state_index(pair.j)
+    nu = system.n_coordinates
+    # A member of a cluster (or of a unit resting on a limiter) is hit: constraints.cluster_impact,
+    # or, where a contact of the cluster would pull, the law on the pair alone, then the unit is
+    # released and its contacts are looked at again (cascade).
+    held = [pair.i, pair.j] if any(system.units[u].is_cluster or system.units[u].pinned
+                                   for u in (contact.unit_a, contact.unit_b)) else None
     num = system.precision.number
     law = scene.law
     ci1, Mi1, Gi1 = law_constants(scene, scene.bodies[pair.i], num)
@@ -46,6 +52,7 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
     ps, pm = law.scale_power, law.inertia_power
     one_k = num(1 + law.restitution)
     k = float(law.restitution)
+    law_k = num(law.restitution)
     eps = system.precision.epsilon
     tiny = SEPARATION_ULPS * eps
     strict = scene.on_inconsistent == "error"
@@ -57,9 +64,29 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
     def values(s, pars):
         return evaluate(function, s, pars)[base:base + CONTACT_VALUES].tolist()
 
+    seen: list = []  # what resolve saw: gap'', gradient, metrics and rates before the collision
+    # below_resolution holds only if v^2 <= 2 A h_res or v <= A (1 - k) t_res / 2 (see on_collision).
+    h_bound = 2 * RESOLUTION_ULPS * eps
+    t_bound = (1 - k) * RESOLUTION_ULPS * eps / 2
+    d = scene.bodies[pair.i].radius + scene.bodies[pair.j].radius
+    length = max(float(hi - lo) for lo, hi in (scene.track.domain(body) for body in scene.bodies))
+    curvature_scale = float(d) if d > 0 else length / 1000
+
     def resolve(s, t, pars) -> bool:
-        _gap, gi, gj, si, sj = values(s, pars)[:5]
+        _gap, gi, gj, si, sj, acc, _jerk = values(s, pars)
         vi, vj = s[nu + a], s[nu + b]
+        seen[:] = (float(acc), gi, gj, float(si), float(sj), float(vi), float(vj))
+        if held is not None:
+            # A cluster or a unit on a stop takes part: rigid through the impact if its contacts push.
+            rates = cluster_impact(system, s, pars, contact, (gi, gj), gi * vi + gj * vj, law_k)
+            if rates is not None:
+                before = s.tolist()
+                for body, rate in rates.items():
+                    s[nu + body] = rate
+                records.append((t, contact.pair_index, before, None, s.tolist(), 2))
+                if limit is not None and log.count >= limit:
+                    return stop_at_max_collisions(stop, limit)
+                return True
         ci = ci1 * si**ps if ps else ci1
         cj = cj1 * sj**ps if ps else cj1
         Mi = Mi1 * si**pm if pm else Mi1
@@ -91,6 +118,9 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         s[nu + a], s[nu + b] = vi_new, vj_new
         if limit is not None and log.count >= limit:
             return stop_at_max_collisions(stop, limit)
+        if held is not None:
+            stop.reason, stop.data = "release", {"bodies": tuple(held)}
+            return False
         return True
 
     def on_collision(ta, d_sgn):
@@ -101,9 +131,20 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         if settle is not None and not settle(s, t, (a, b), number):
             return False
         # Persistent contact: bounces left below the run's resolution while pressed together.
+        # Only a slow separation can qualify (v^2 <= 2 A h_res or v <= A (1 - k) t_res / 2): test
+        # that first with a generous bound A on |gap''| (the one before the collision plus the
+        # velocity terms over the contact's curvature scale; too small a bound only delays the
+        # contact by a bounce), then judge with the gap's actual acceleration and jerk.
+        acc0, gi, gj, si, sj, vi0, vj0 = seen
+        vi, vj = s[nu + a], s[nu + b]
+        opening = float(gi * vi + gj * vj)  # positions do not change in a collision: nor the gradient
+        vi, vj = float(vi), float(vj)
+        bound = 8 * (abs(acc0) + (vi0 * vi0 + vj0 * vj0 + vi * vi + vj * vj) * (si * si + sj * sj) / curvature_scale)
+        scale = 1 + abs(float(s[a])) + abs(float(s[b]))
+        if opening * opening > bound * h_bound * scale and opening > bound * t_bound * (abs(float(t)) + time_scale):
+            return close_collision(log, number, False)
         _gap, gi, gj, _si, _sj, acc, jerk = values(s, pars)
         opening = float(gi * s[nu + a] + gj * s[nu + b])
-        scale = 1 + abs(float(s[a])) + abs(float(s[b]))
         return close_collision(log, number,
                                below_resolution(opening, float(acc), k, float(t), scale, time_scale, eps, float(jerk)))
 
@@ -122,14 +163,17 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
     by 2 OPEN_ULPS ulps by moving the second body along its coordinate
     (heyoka misses a root of an event function that starts a step at 0).
     """
-    nu = system.n_units
+    nu = system.n_coordinates
     eps = system.precision.epsilon
     k = float(scene.law.restitution)
     stop = log.stop
     by_unit: dict[int, list[int]] = {}
+    where = []  # each contact's two places in the state
     for number, c in enumerate(system.contacts):
-        by_unit.setdefault(c.unit_a, []).append(number)
-        by_unit.setdefault(c.unit_b, []).append(number)
+        a, b = system.state_index(c.pair.i), system.state_index(c.pair.j)
+        where.append((a, b))
+        by_unit.setdefault(a, []).append(number)
+        by_unit.setdefault(b, []).append(number)
     max_rounds = 64 * system.n_bodies
 
     def values(s, number):
@@ -143,8 +187,7 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
         while pending:
             unit = pending.pop()
             for number in by_unit.get(unit, ()):
-                c = system.contacts[number]
-                a, b = c.unit_a, c.unit_b
+                a, b = where[number]
                 gap, gi, gj, _si, _sj, acc, jerk = values(s, number)
                 scale = 1 + abs(float(s[a])) + abs(float(s[b]))
                 if abs(float(gap)) > RESOLUTION_ULPS * eps * scale:
@@ -168,12 +211,12 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
         for number in sorted({n for unit in seen for n in by_unit.get(unit, ())}):
             if number == skip_open:
                 continue
-            c = system.contacts[number]
+            a, b = where[number]
             gap, gi, gj = values(s, number)[:3]
-            scale = 1 + abs(float(s[c.unit_a])) + abs(float(s[c.unit_b]))
+            scale = 1 + abs(float(s[a])) + abs(float(s[b]))
             target = OPEN_ULPS * eps * scale
             if abs(float(gap)) <= target and float(gj) > 0:
-                s[c.unit_b] = s[c.unit_b] + (2 * target - gap) / gj
+                s[b] = s[b] + (2 * target - gap) / gj
         return True
 
     return settle

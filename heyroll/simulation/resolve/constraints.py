@@ -1,0 +1,144 @@
+"""Persistent contact where the gap is not linear: clusters as holonomic constraints.
+
+On an arc chain or a curve, bodies pressed together (their bounces below the
+run's resolution, see :func:`heyroll.simulation.events.below_resolution`)
+form a cluster whose contacts keep g_l = |C_i - C_j| - r_i - r_j = 0; the
+system integrates the constrained motion with the contact forces as Lagrange
+multipliers (:func:`heyroll.simulation.system._constrained_accelerations`) and
+a cluster splits by an event where a contact force would pull. A unit resting
+on a limiter is pinned there (q' = 0) until the track's forces pull it away.
+
+This module puts the state on the constraints as a mode starts, in the run's
+own number type: positions first (the later member of each contact moves
+along its coordinate until g_l = 0), then rates by a plastic impulse on every
+contact at once (the tridiagonal system of the contacts' inverse masses),
+which keeps the generalized momentum along the constraints, as the circle's
+rigid clusters do (:func:`heyroll.simulation.driver._merge`). Pinned units
+stop (q' = 0): a stop absorbs the plastic impact.
+"""
+
+from __future__ import annotations
+
+from ..contact_function import BODY_VALUES, body_function, evaluate, link_function
+from ..system import link_bodies
+
+#: Newton steps on the positions (the gaps start within a few ulps of 0).
+POSITION_PASSES = 3
+
+
+def project_onto_contacts(system, state: list, pars) -> list:
+    """The state with every cluster's contacts closed (g = 0, g' = 0) and pinned units at rest."""
+    s = list(state)
+    n = system.n_bodies
+    for unit in system.units:
+        if unit.pinned:
+            for k in unit.members:
+                s[n + k] = s[n + k] * 0
+    links = link_function(system)
+    if links is None:
+        return s
+    per_link = 3
+    for _ in range(POSITION_PASSES):
+        for number, link in enumerate(system.links):
+            i, j = link_bodies(system, link)
+            gap, _gi, gj = evaluate(links, s, pars)[per_link * number: per_link * number + 3].tolist()
+            s[j] = s[j] - gap / gj
+    values = evaluate(links, s, pars).tolist()
+    bodies = evaluate(body_function(system), s, pars).tolist()
+    for u, unit in enumerate(system.units):
+        numbers = [m for m, link in enumerate(system.links) if link.unit == u]
+        if not numbers or unit.pinned:
+            continue
+        members = unit.members
+        M = [system.precision.number(system.rolling_mass[k]) * bodies[BODY_VALUES * k + 3] ** 2 for k in members]
+        grads = [(values[per_link * m + 1], values[per_link * m + 2]) for m in numbers]
+        rates = [gi * s[n + i] + gj * s[n + j] for (gi, gj), (i, j) in zip(grads, zip(members, members[1:]))]
+        impulses = _tridiagonal(grads, M, [-r for r in rates], inverse=False)
+        for p, k in enumerate(members):
+            push = 0
+            if p > 0:
+                push = push + impulses[p - 1] * grads[p - 1][1]
+            if p < len(grads):
+                push = push + impulses[p] * grads[p][0]
+            s[n + k] = s[n + k] + push / M[p]
+    return s
+
+
+def cluster_impact(system, s, pars, contact, grad, closing, restitution):
+    """A body or cluster hits a cluster, or a unit resting on a stop: Newton's law on the gap rate
+    with the clusters kept rigid through the impact (flag 2, as on the circle).
+
+    The bodies of the two units form a chain of contacts (the clusters' links and
+    the colliding contact). Impulses P_l along the contacts' gap gradients, with
+    the inverse generalized masses 1/M_k (0 for a unit on a stop: the stop takes
+    the impulse), leave every link's rate at 0 and turn the contact's closing
+    rate c into -k c: one tridiagonal system. Returns the new rates of the
+    chain's bodies {k: q_k'}, or None where a link would have to pull (a negative
+    impulse): the impact does not move the cluster rigidly, and the caller
+    releases it (its contacts are then resolved one by one).
+    """
+    n = system.n_bodies
+    ua, ub = system.units[contact.unit_a], system.units[contact.unit_b]
+    if ua.pinned and ub.pinned:
+        return None
+    links = link_function(system)
+    link_values = evaluate(links, s, pars).tolist() if links is not None else []
+    bodies = evaluate(body_function(system), s, pars).tolist()
+    chain = list(ua.members + ub.members)
+    inverse = []
+    for k in chain:
+        pinned = system.units[system.unit_of[k]].pinned
+        inverse.append(0 if pinned else 1 / (system.precision.number(system.rolling_mass[k]) * bodies[BODY_VALUES * k + 3] ** 2))
+    grads, rhs = [], []
+    for x, y in zip(chain, chain[1:]):
+        if (x, y) == (contact.pair.i, contact.pair.j):
+            grads.append(tuple(grad))
+            rhs.append(-(1 + restitution) * closing)
+            continue
+        number = next(m for m, link in enumerate(system.links) if link_bodies(system, link) == (x, y))
+        grads.append(tuple(link_values[3 * number + 1: 3 * number + 3]))
+        rhs.append(closing * 0)
+    # Links inside a unit on a stop do not move (both inverse masses 0): leave them out.
+    keep = [l for l in range(len(grads)) if inverse[l] != 0 or inverse[l + 1] != 0]
+    if keep != list(range(keep[0], keep[-1] + 1)):
+        return None
+    first = keep[0]
+    impulses = _tridiagonal(grads[first:keep[-1] + 1], inverse[first:keep[-1] + 2], rhs[first:keep[-1] + 1])
+    if any(float(x) < 0 for x in impulses):
+        return None
+    out = {}
+    for p in range(len(impulses) + 1):
+        k = chain[first + p]
+        push = 0
+        if p > 0:
+            push = push + impulses[p - 1] * grads[first + p - 1][1]
+        if p < len(impulses):
+            push = push + impulses[p] * grads[first + p][0]
+        out[k] = s[n + k] + push * inverse[first + p]
+    return out
+
+
+def _tridiagonal(grads, M, rhs, *, inverse=True) -> list:
+    """Solve sum_m A_lm x_m = rhs_l, A_lm = sum_k dg_l/dq_k dg_m/dq_k w_k (members k of links l, m).
+
+    ``M``: the members' inverse masses w_k (or their masses, ``inverse=False``).
+    """
+    w = list(M) if inverse else [1 / m for m in M]
+    L = len(grads)
+    cp, dp = [None] * L, [None] * L
+    for l in range(L):
+        diag = grads[l][0] ** 2 * w[l] + grads[l][1] ** 2 * w[l + 1]
+        if l == 0:
+            den = diag
+            dp[l] = rhs[l] / den
+        else:
+            sub = grads[l][0] * grads[l - 1][1] * w[l]
+            den = diag - sub * cp[l - 1]
+            dp[l] = (rhs[l] - sub * dp[l - 1]) / den
+        if l < L - 1:
+            cp[l] = grads[l][1] * grads[l + 1][0] * w[l + 1] / den
+    x = [None] * L
+    x[L - 1] = dp[L - 1]
+    for l in range(L - 2, -1, -1):
+        x[l] = dp[l] - cp[l] * x[l + 1]
+    return x

@@ -1,0 +1,120 @@
+"""Persistent contact on path tracks (issue 11, item 4): clusters as holonomic constraints,
+contact forces as Lagrange multipliers, splits by an event, units resting on a limiter.
+
+The checks are independent of the constrained formulation where possible: a cluster on
+one concave arc equal to a circle must move as the circle's rigid cluster (a different
+formulation: one coordinate, summed generalized masses, eq. 21); the sum of the bodies'
+own first integrals must stay constant while they roll together (ideal contacts do no
+work); the gap must stay at zero.
+"""
+
+from __future__ import annotations
+
+import mpmath
+import numpy as np
+import pytest
+
+import heyroll
+from heyroll.model.bodies import Body
+from heyroll.model.scene import RunSettings, Scene
+from heyroll.model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment
+from heyroll.model.tracks.base import first_integral
+from heyroll.simulation.driver import simulate
+
+DISK = Body.of_shape("disk", "0.05", mass="1")
+PARABOLA = CurveTrack.make("0.5*x**2", "-1.5", "1.5")
+
+
+def total_first_integral(scene, state) -> float:
+    n = len(scene.bodies)
+    state = np.asarray(state, dtype=float)
+    return sum(float(first_integral(scene.track, b, state[k], state[n + k], scene.g, scene.frame))
+               for k, b in enumerate(scene.bodies))
+
+
+def gaps(scene, state):
+    n = len(scene.bodies)
+    state = np.asarray(state, dtype=float)
+    return [float(scene.gap(k, k + 1, state[k], state[k + 1])) for k in range(n - 1)]
+
+
+def one_arc(scene):
+    R = scene.track.radius
+    chain = ArcChainTrack.make([Segment("arc", R, "concave", -mpmath.pi, mpmath.pi)], start_x=0, start_y=-R)
+    s = [(R - b.radius) * (p + mpmath.pi) for b, p in zip(scene.bodies, scene.q)]
+    v = [(R - b.radius) * d for b, d in zip(scene.bodies, scene.dq)]
+    return Scene.make(chain, scene.bodies, s, v, law=scene.law, g=scene.g, run=scene.run)
+
+
+@pytest.mark.parametrize("k", ["0", "0.4"])
+def test_a_cluster_on_one_arc_moves_as_the_circles_rigid_cluster(k):
+    a = Body.of_shape("solid_sphere", "0.1", mass="1")
+    b = Body.of_shape("disk", "0.15", mass="2")
+    circle = Scene.make(CircleTrack.of_radius(1), [a, b], phi=["-0.9", "0.5"], dphi=[0, 0],
+                        law=heyroll.make_law("hedrih", k), run=RunSettings.make(15))
+    arc = one_arc(circle)
+    rc, ra = simulate(circle), simulate(arc)
+    assert rc.status.value == ra.status.value == "completed"
+    assert [m.clusters for m in ra.mode_changes] == [m.clusters for m in rc.mode_changes] == [(), ((1, 2),)]
+    # The Zeno sequence's end is judged by the resolution: the merge instants agree to ~1e-6 s.
+    assert abs(ra.mode_changes[1].t - rc.mode_changes[1].t) < 1e-6
+    rho = np.array([1 - 0.1, 1 - 0.15])
+    fa, fc = np.asarray(ra.final_state, dtype=float), np.asarray(rc.final_state, dtype=float)
+    assert np.allclose(fa[:2] / rho - np.pi, fc[:2], atol=1e-8)
+    assert np.allclose(fa[2:] / rho, fc[2:], atol=1e-8)
+    assert abs(gaps(arc, fa)[0]) < 1e-13
+
+
+def test_three_disks_on_a_parabola_settle_into_one_cluster_that_keeps_its_energy():
+    scene = Scene.make(PARABOLA, [DISK] * 3, ["-0.8", "0.0", "0.6"], [0, 0, 0],
+                       law=heyroll.make_law("newton", "0.3"), run=RunSettings.make(30))
+    result = simulate(scene)
+    assert result.status.value == "completed", result.message
+    assert result.mode_changes[-1].clusters == ((1, 2, 3),)
+    start = result.mode_changes[-1]
+    e0, e1 = total_first_integral(scene, start.state), total_first_integral(scene, result.final_state)
+    assert abs(e1 - e0) < 1e-12 * abs(e0)
+    assert max(abs(g) for g in gaps(scene, result.final_state)) < 1e-13
+    assert total_first_integral(scene, result.final_state) < total_first_integral(scene, result.initial_state)
+
+
+def test_a_cluster_in_a_double_well_splits_where_its_contact_would_pull():
+    well = CurveTrack.make("0.5*x**2*(x**2 - 1)**2", "-1.6", "1.6")
+    scene = Scene.make(well, [DISK] * 2, ["-1.3", "0.9"], [0, 0], law=heyroll.make_law("hedrih", "0.2"),
+                       run=RunSettings.make(30))
+    result = simulate(scene, dense=True)
+    assert result.status.value == "completed", result.message
+    clusters = [m.clusters for m in result.mode_changes]
+    assert ((1, 2),) in clusters and clusters[clusters.index(((1, 2),)) + 1] == ()
+    assert result.contact_intervals and result.contact_intervals[0]["t_end"] > result.contact_intervals[0]["t_start"]
+    t, X = result.sample(20000)
+    assert scene.gap(0, 1, X[:, 0], X[:, 1]).min() > -1e-12
+    # After the split the pair separates: the gap grows from zero.
+    split = result.mode_changes[clusters.index(((1, 2),)) + 1].t
+    after = (t > split) & (t < split + 0.05)
+    assert np.all(np.diff(scene.gap(0, 1, X[after, 0], X[after, 1])) > 0)
+
+
+def test_a_pile_comes_to_rest_on_a_limiter():
+    track = CurveTrack.make("0.5*x**2", "0.2", "1.5")
+    scene = Scene.make(track, [DISK] * 2, ["0.5", "1.2"], [0, 0], limiter_restitution="0.5",
+                       law=heyroll.make_law("newton", "0.5"), run=RunSettings.make(20))
+    result = simulate(scene)
+    assert result.status.value == "completed", result.message
+    assert result.mode_changes[-1].pinned == (((1, 2), "lower"),)
+    final = np.asarray(result.final_state, dtype=float)
+    assert np.all(final[2:] == 0) and abs(final[0] - 0.2) < 1e-12
+    assert abs(gaps(scene, final)[0]) < 1e-13
+
+
+def test_persistent_contact_on_a_curve_in_every_precision():
+    scene = Scene.make(PARABOLA, [DISK] * 2, ["-0.6", "0.3"], [0, 0], law=heyroll.make_law("hedrih", "0"),
+                       run=RunSettings.make(5))
+    runs = {p: simulate(scene, precision=p) for p in ("double", "long", "quad")}
+    for p, r in runs.items():
+        assert r.status.value == "completed", (p, r.message)
+        assert r.mode_changes[-1].clusters == ((1, 2),)
+    quad = np.array([mpmath.mpf(str(x)) for x in runs["quad"].final_state])
+    for p, tol in (("double", 1e-12), ("long", 1e-15)):
+        diff = max(abs(mpmath.mpf(str(x)) - y) for x, y in zip(runs[p].final_state, quad))
+        assert diff < tol, (p, diff)
