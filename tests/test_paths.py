@@ -432,11 +432,13 @@ def test_cli_bad_path_scenes_exit_2_with_the_field(tmp_path, capsys, edit, field
     assert not out.exists()
 
 
-def test_cli_equilibria_refuses_a_circle(capsys, tmp_path):
+def test_cli_equilibria_runs_on_a_circle_too(capsys, tmp_path):
+    # One engine: every command on every track (the circle's cases: tests/test_circle_equilibria.py).
     path = tmp_path / "c.toml"
     path.write_text(default_scene_text())
-    assert main(["equilibria", str(path)]) == 2
-    assert "track.type" in capsys.readouterr().err
+    assert main(["equilibria", str(path), "--json"]) == 0
+    types = [e["type"] for e in json.loads(capsys.readouterr().out)]
+    assert sorted(types) == ["center", "saddle"]
 
 
 def test_total_energy_is_the_sum_of_body_energies():

@@ -79,12 +79,12 @@ def build_parser() -> argparse.ArgumentParser:
     val.add_argument("scene", nargs="?", help="scene file (TOML); the built-in default scene if omitted")
     val.add_argument("--out", default="heyroll-validation", help="output directory (default: heyroll-validation)")
     val.add_argument("--collisions", default="20", help="collisions compared with the reference (default: 20)")
-    eq = sub.add_parser("equilibria", help="relative equilibria of a body on a curve or arc-chain track (centres, saddles)")
-    eq.add_argument("scene", help="scene file (TOML) with track type curve, arcs or three_arcs")
+    eq = sub.add_parser("equilibria", help="relative equilibria of a body on its track, in a fixed or turning plane (centres, saddles)")
+    eq.add_argument("scene", help="scene file (TOML), any track type")
     eq.add_argument("--json", action="store_true", help="print a JSON array of {x, type} sorted by x")
     eq.add_argument("--body", default="1", help="which body (1..N; default 1): equilibria depend on its radius")
-    por = sub.add_parser("portrait", help="phase portrait, energy surface and bifurcation diagram of a path-track scene")
-    por.add_argument("scene", help="scene file (TOML) with track type curve, arcs or three_arcs")
+    por = sub.add_parser("portrait", help="phase portrait, energy surface and bifurcation diagram of one body of a scene")
+    por.add_argument("scene", help="scene file (TOML), any track type")
     por.add_argument("--out", default="heyroll-portrait", help="output directory (default: heyroll-portrait)")
     por.add_argument("--body", default="1", help="which body (1..N; default 1)")
     por.add_argument("--omega-max", dest="omega_max", help="bifurcation diagram from 0 to this Omega (rad/s)")
@@ -191,11 +191,9 @@ def _sigterm_as_interrupt():
 
 
 def _path_scene(path: str, command: str) -> Scene:
-    scene = load_scene(path)
-    if scene.track.closed:
-        raise BadInput("track.type", f"'heyroll {command}' needs an open track (curve, arcs or three_arcs), "
-                       f"got {scene.track.kind}")
-    return scene
+    """The scene of ``heyroll equilibria`` / ``portrait``: any track (on a circle the
+    coordinate is phi in [-pi, pi), periodic, with no limiters)."""
+    return load_scene(path)
 
 
 def _body_number(text: str, scene: Scene) -> int:
@@ -240,9 +238,10 @@ def _portrait(args) -> int:
         raise BadInput("--out", f"{out} exists and is not a directory")
     data = write_portrait(scene, out, scene_source=args.scene, body=body, omegas=omegas)
     for e in data["equilibria"]:
-        print(f"{e['type']:>7} at x = {e['x']:.17g}")
+        print(f"{e['type']:>7} at x = {e['x']:.17g} ({data['coordinate']} = {e['q']:.17g})")
     for b in data["bifurcations"]:
-        print(f"bifurcation at Omega = {b['omega']:.17g} rad/s near x = {b['x']:.6g}: "
+        print(f"bifurcation at Omega = {b['omega']:.17g} rad/s near x = {b['x']:.6g} "
+              f"({data['coordinate']} = {b['q']:.6g}): "
               f"{b['equilibria_before']} -> {b['equilibria_after']} equilibria")
     print(f"portrait checked against {data['check']['integrated_trajectories']} integrated trajectories: "
           f"first integral drift {data['check']['worst_relative_first_integral_drift']:.2g} (relative)")

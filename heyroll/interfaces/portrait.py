@@ -1,4 +1,7 @@
-"""Files of the analyses of one body on an open track: equilibria and the phase portrait.
+"""Files of the analyses of one body on a track: equilibria and the phase portrait.
+
+The same files on every track: on an open track in (x, x') or (s, s'), on a
+circle in (phi, phi') with phi in [-pi, pi).
 
 ``write_portrait``: portrait.png, energy_surface.png, bifurcation.png and
 portrait.json (equilibria, bifurcations, the check of the portrait against
@@ -22,8 +25,15 @@ def equilibria_list(scene: Scene, body: int = 0) -> list:
 
 
 def default_omegas(scene: Scene) -> np.ndarray:
-    """0 to twice the largest of the scene's Omega and sqrt(g / smallest centre-path radius)."""
+    """0 to twice the largest of the scene's Omega and a scale of the track's bifurcations.
+
+    That scale is 3 rad/s on an open track and, on a circle, sqrt(g / rho) for
+    the smallest centre-path radius rho = R - r, the pitchfork of the bottom.
+    """
     om = float(scene.frame.omega)
+    if scene.track.closed:
+        rho = min(float(scene.track.path_radius(b)) for b in scene.bodies)
+        return np.linspace(0.0, 2 * max(om, float(np.sqrt(float(scene.g) / rho))), 121)
     return np.linspace(0.0, 2 * max(om, 3.0), 121)
 
 
@@ -40,11 +50,12 @@ def write_portrait(scene: Scene, out_dir: Path, *, scene_source: str, body: int 
     bif = bifurcations(problem, omegas)
     data = {
         "scene": scene.name, "scene_source": scene_source, "body": body + 1,
+        "track": scene.track.kind, "coordinate": scene.coordinate,
         "omega": float(scene.frame.omega), "axis_x": float(scene.frame.axis_x),
         "equilibria": [{"x": e.x, "q": e.q, "type": e.type, "stiffness": e.stiffness,
                         "potential_per_mass": e.potential} for e in eq],
         "separatrix_levels_per_mass": sorted({e.potential for e in eq if e.type == "saddle"}),
-        "bifurcations": [{"omega": b.omega, "x": b.x, "equilibria_before": b.before,
+        "bifurcations": [{"omega": b.omega, "x": b.x, "q": b.q, "equilibria_before": b.before,
                           "equilibria_after": b.after} for b in bif],
         "omega_range": [float(omegas[0]), float(omegas[-1])],
         "check": {"integrated_trajectories": check.trajectories, "duration_s": check.duration,

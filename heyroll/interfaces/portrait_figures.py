@@ -1,8 +1,10 @@
-"""Phase portraits and run figures on open tracks (paper sections 5-6).
+"""Phase portraits and run figures on every track (paper sections 4-6).
 
 * :func:`portrait_figure`: the complete phase portrait of one body (level
   curves of the first integral, separatrices through the saddles, centres,
   limiters, junctions) with integrated trajectories drawn over it (Figs. 14-16, 19).
+  On a circle it is drawn in (phi, phi') over phi in [-pi, pi], whose two
+  ends are one point (the top), and the trajectories are wrapped into it.
 * :func:`energy_surface_figure`: the total-mechanical-energy surface H(q, q') (Fig. 16b).
 * :func:`bifurcation_figure`: equilibria against Omega (section 5.3's theorem).
 * :func:`branches_figure` / :func:`body_energy_figure`: a multi-body run's phase
@@ -61,6 +63,27 @@ def _velocity_range(scene: Scene, body: int, q: np.ndarray, problem: Equilibrium
     return 1.15 * float(np.sqrt(2 * (V.max() - V.min()) / (kappa * F.min())))
 
 
+def _wrapped(q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An angle's trajectory brought into [-pi, pi), broken (NaN) where it wraps round."""
+    w = np.remainder(q + np.pi, 2 * np.pi) - np.pi
+    jumps = np.flatnonzero(np.abs(np.diff(w)) > np.pi) + 1
+    return np.insert(w, jumps, np.nan), np.insert(v, jumps, np.nan)
+
+
+def _path_scale(problem: EquilibriumProblem) -> float:
+    """A length of the track (m): its parameter range, or the circumference 2 pi rho on a circle."""
+    lo, hi = problem.domain
+    return (hi - lo) * problem.rho if problem.periodic else hi - lo
+
+
+def _coordinate_label(scene: Scene) -> tuple[str, str]:
+    return {
+        "x": ("x (contact abscissa) [m]", "dx/dt [m/s]"),
+        "s": ("s (arc length of the centre's path) [m]", "ds/dt [m/s]"),
+        "phi": ("phi (angle from the lowest point) [rad]", "dphi/dt [rad/s]"),
+    }[scene.coordinate]
+
+
 def _junctions(scene: Scene, body: int) -> list[float]:
     if isinstance(scene.track, ArcChainTrack):
         return [p.s0 for p in scene.track.pieces(scene.bodies[body])[1:]]
@@ -85,45 +108,80 @@ def portrait_figure(scene: Scene, path, *, body: int = 0, trajectories: int = 4,
         ax.contour(q, v, H, levels=saddle_levels, colors="tab:red", linewidths=1.4, negative_linestyles="solid")
     for e in eq:
         ax.plot(e.q, 0, "o" if e.type == "center" else "x", color="tab:green" if e.type == "center" else "tab:red",
-                ms=8, mew=2)
-    for x in (lo, hi):
-        ax.axvline(x, color="k", lw=2)
+                ms=8, mew=2, clip_on=False, zorder=5)
+    if problem.periodic:
+        for x in (lo, hi):
+            ax.axvline(x, color="k", lw=1, ls="--")
+        for e in eq:  # the top, phi = -pi, is phi = pi too
+            if e.q <= lo + 1e-9:
+                ax.plot(hi, 0, "o" if e.type == "center" else "x",
+                        color="tab:green" if e.type == "center" else "tab:red", ms=8, mew=2, clip_on=False, zorder=5)
+        ends = "dashed: phi = -pi and pi, the top (one point)"
+    else:
+        for x in (lo, hi):
+            ax.axvline(x, color="k", lw=2)
+        ends = "black: limiters"
     for s in _junctions(scene, body):
         ax.axvline(s, color="0.3", lw=0.8, ls="--")
     check = _overlay(scene, body, problem, eq, ax, duration)
-    coord = "x (contact abscissa) [m]" if scene.coordinate == "x" else "s (arc length of the centre's path) [m]"
-    ax.set_xlabel(coord)
-    ax.set_ylabel(f"d{scene.coordinate}/dt [m/s]")
+    xlabel, ylabel = _coordinate_label(scene)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
     omega = float(scene.frame.omega)
     ax.set_title(f"{scene.name}\nphase portrait of body {body + 1}, Omega = {omega:g} rad/s "
-                 f"(red: separatrices, o centres, x saddles, black: limiters"
+                 f"(red: separatrices, o centres, x saddles, {ends}"
                  f"{', dashed: junctions' if _junctions(scene, body) else ''}; colour: integrated)", fontsize=8)
+    if problem.periodic:
+        ax.set_xlim(lo, hi)
     ax.set_ylim(-vmax, vmax)
     _save(fig, path)
     return check
 
 
 def _overlay(scene, body, problem, eq, ax, duration) -> PortraitCheck:
-    """Integrate a few trajectories and draw them; measure H along each."""
+    """Integrate a few trajectories and draw them; measure H along each.
+
+    They start at rest between each centre and the next equilibrium, and
+    just off the first saddle; on a circle (up to) one more starts at the
+    deepest centre fast enough to go round over the top.
+    """
     lo, hi = problem.domain
     centres = [e for e in eq if e.type == "center"]
-    starts = [c.q + 0.4 * (min([s.q for s in eq if s.q > c.q] + [hi]) - c.q) for c in centres]
     saddles = [e for e in eq if e.type == "saddle"]
+    if problem.periodic:
+        period = hi - lo
+        starts = [c.q + 0.4 * (min([s.q for s in eq if s.q > c.q] + [eq[0].q + period]) - c.q) for c in centres]
+    else:
+        starts = [c.q + 0.4 * (min([s.q for s in eq if s.q > c.q] + [hi]) - c.q) for c in centres]
     if saddles:
         starts.append(saddles[0].q + 1e-3 * (hi - lo))
-    starts = starts[:4] or [lo + 0.3 * (hi - lo)]
-    worst, T = 0.0, duration or 4 * float(np.sqrt((hi - lo) / problem.g)) * 3
+    starts = [(q0, 0.0) for q0 in starts]
+    span = _path_scale(problem)
+    if problem.periodic:
+        starts = starts[:3]
+        bottom = min(centres or eq, key=lambda e: e.potential)
+        q = np.linspace(lo, hi, GRID)
+        barrier = float(np.max(problem.potential(q))) - bottom.potential
+        kappa = float(scene.bodies[body].kappa)
+        starts.append((bottom.q, float(np.sqrt(2 * 1.2 * barrier / kappa)) / problem.rho))
+    starts = starts[:4] or [(lo + 0.3 * (hi - lo), 0.0)]
+    worst, T = 0.0, duration or 4 * float(np.sqrt(span / problem.g)) * 3
     bodies = (scene.bodies[body],)
-    for k, q0 in enumerate(starts):
-        single = Scene.make(scene.track, bodies, [q0], [0], law=scene.law,
+    for k, (q0, v0) in enumerate(starts):
+        single = Scene.make(scene.track, bodies, [q0], [v0], law=scene.law,
                             limiter_restitution=1, frame=scene.frame, g=scene.g, run=RunSettings.make(T),
                             name=scene.name)
         res = simulate(single, dense=True, precision="long")
         t, X = res.sample(3000)
-        H = body_energy(single, 0, X[:, 0].astype(float), X[:, 1].astype(float))
-        scale = max(abs(res.energy_initial), float(single.bodies[0].mass) * problem.g * (hi - lo))
-        worst = max(worst, float(np.max(np.abs(H - res.energy_initial))) / scale)
-        ax.plot(X[:, 0].astype(float), X[:, 1].astype(float), lw=0.9, color=f"C{k}")
+        q, v = X[:, 0].astype(float), X[:, 1].astype(float)
+        H = body_energy(single, 0, q, v)
+        # the run reports a fixed circle's energy with its zero at the bottom (eq. 26), H puts it at y = 0
+        h0 = float(body_energy(single, 0, q0, v0)) if problem.periodic else res.energy_initial
+        scale = max(abs(h0), float(single.bodies[0].mass) * problem.g * span)
+        worst = max(worst, float(np.max(np.abs(H - h0))) / scale)
+        if problem.periodic:
+            q, v = _wrapped(q, v)
+        ax.plot(q, v, lw=0.9, color=f"C{k}")
     return PortraitCheck(trajectories=len(starts), worst_relative_drift=worst, duration=T)
 
 
@@ -138,8 +196,9 @@ def energy_surface_figure(scene: Scene, path, *, body: int = 0) -> None:
     ax = fig.add_subplot(projection="3d")
     Q, Vv = np.meshgrid(q, v)
     ax.plot_surface(Q, Vv, H, cmap="viridis", linewidth=0, antialiased=True, alpha=0.9)
-    ax.set_xlabel(scene.coordinate)
-    ax.set_ylabel(f"d{scene.coordinate}/dt")
+    xlabel, ylabel = _coordinate_label(scene)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
     ax.set_zlabel("H / m [J/kg]")
     ax.set_title(f"{scene.name}: first integral (total mechanical energy in the rotating plane) of body {body + 1}",
                  fontsize=8)
@@ -147,18 +206,29 @@ def energy_surface_figure(scene: Scene, path, *, body: int = 0) -> None:
 
 
 def bifurcation_figure(scene: Scene, path, omegas, *, body: int = 0) -> list:
+    """Equilibria against Omega: their contact x on an open track, their phi on a circle
+    (where x = R sin(phi) would put the bottom and the top on one point)."""
     problem = problem_of(scene, body)
     diagram = bifurcation_diagram(problem, omegas)
     fig = Figure(figsize=(8, 5))
     ax = fig.add_subplot()
+    where = (lambda e: e.q) if problem.periodic else (lambda e: e.x)
     for kind, colour, marker in (("center", "tab:green", "."), ("saddle", "tab:red", "x")):
-        pts = [(om, e.x) for om, eq in diagram for e in eq if e.type == kind]
+        pts = [(om, where(e)) for om, eq in diagram for e in eq if e.type == kind]
         if pts:
             ax.plot(*zip(*pts), marker, color=colour, ms=3, ls="none", label=kind)
     ax.axvline(float(scene.frame.omega), color="0.5", ls=":", label="scene's Omega")
-    if isinstance(scene.track, ArcChainTrack):
-        # the paper's bifurcation parameter of the first concave arc, lambda = g / ((R - r) Omega^2)
-        rho = next(1 / p.c for p in scene.track.pieces(scene.bodies[body]) if p.c > 0)
+    critical = np.sqrt(problem.g / problem.rho) if problem.periodic else None
+    if problem.periodic and float(scene.frame.axis_x) == 0 and float(np.max(omegas)) > critical:
+        # the closed form of the hoop's pitchfork: cos(phi) = g / (rho Omega^2) beyond sqrt(g / rho)
+        om = np.linspace(critical, float(np.max(omegas)), 200)[1:]
+        branch = np.arccos(np.clip(problem.g / (problem.rho * om * om), -1, 1))
+        ax.plot(om, branch, color="0.4", lw=0.7, label="cos(phi) = g / (rho Omega^2)")
+        ax.plot(om, -branch, color="0.4", lw=0.7)
+    if isinstance(scene.track, ArcChainTrack) or problem.periodic:
+        # the paper's bifurcation parameter of the (first concave) arc, lambda = g / ((R - r) Omega^2)
+        rho = problem.rho if problem.periodic else next(
+            1 / p.c for p in scene.track.pieces(scene.bodies[body]) if p.c > 0)
         g = float(scene.g)
 
         def to_lambda(om):
@@ -174,7 +244,7 @@ def bifurcation_figure(scene: Scene, path, omegas, *, body: int = 0) -> list:
         top_om = float(np.max(omegas))
         top.set_xticks([lam for lam in (16, 4, 2, 1, 0.5, 0.25) if np.sqrt(g / (rho * lam)) <= top_om])
     ax.set_xlabel("Omega [rad/s]")
-    ax.set_ylabel("x of the equilibrium's contact point [m]")
+    ax.set_ylabel("phi of the equilibrium [rad]" if problem.periodic else "x of the equilibrium's contact point [m]")
     ax.legend(fontsize=8)
     ax.set_title(f"{scene.name}: relative equilibria of body {body + 1} against Omega", fontsize=9)
     _save(fig, path)
