@@ -63,6 +63,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", default="heyroll-out", help="output directory (default: heyroll-out)")
     run.add_argument("--t-end", dest="t_end", help="end time in s (overrides [run] t_end)")
     run.add_argument("--max-collisions", dest="max_collisions", help="stop after N collisions")
+    run.add_argument("--max-events", dest="max_events",
+                     help="stop after N events of every kind together: collisions, junction passages, limiter "
+                          "impacts, contact mode changes (default 2000000; 'none' for no limit)")
     run.add_argument(
         "--precision", default="double",
         help="double | long (x87 extended) | quad | mp:BITS: the whole integration, every event and collision "
@@ -95,6 +98,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else argv
+    if not argv:  # no command: the usage and the commands, then the one-line error
+        parser.print_help(sys.stderr)
+        print("heyroll: error: a command is required", file=sys.stderr)
+        return EXIT_BAD_INPUT
     args = parser.parse_args(argv)
     try:
         if args.command == "default-scene":
@@ -116,22 +124,31 @@ def _run(args) -> int:
     # Every input is checked before anything is written.
     t_end = _positive_time(args.t_end) if args.t_end is not None else None
     max_collisions = _collision_count(args.max_collisions) if args.max_collisions is not None else ...
+    max_events = _max_events(args.max_events)
     scene = load_scene(args.scene) if args.scene else default_scene()
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise BadInput("--out", f"{out} exists and is not a directory")
+    out = _out_dir(args.out)
     precision = Precision.parse(args.precision, "--precision")
     if args.table == "npy" and precision.name != "double":
         raise BadInput("--table", "npy holds float64 columns: use csv for long, quad and MPFR runs")
-    from .outputs import table_sink, write_run
+    from .outputs import prepare_run_directory, remove_run_files, table_sink, write_run
 
-    sink = table_sink(out, args.table)
-    with _progress_bar(args.progress, scene, t_end) as progress, _sigterm_as_interrupt():
-        result = simulate(
-            scene, t_end=t_end, max_collisions=max_collisions, precision=precision,
-            high_accuracy=args.high_accuracy, sink=sink, progress=progress,
-        )
-    write_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures, sink=sink)
+    _writable(out)
+    prepare_run_directory(out)
+    try:
+        sink = table_sink(out, args.table)
+        with _progress_bar(args.progress, scene, t_end) as progress, _sigterm_as_interrupt():
+            result = simulate(
+                scene, t_end=t_end, max_collisions=max_collisions, max_events=max_events, precision=precision,
+                high_accuracy=args.high_accuracy, sink=sink, progress=progress,
+            )
+        write_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures, sink=sink)
+    except OSError as exc:
+        # A full disk or a directory that went away: no half-written set of outputs.
+        try:
+            remove_run_files(out)
+        except OSError:
+            pass
+        raise BadInput("--out", f"writing the run's outputs to {out} failed: {exc.strerror or exc}; nothing kept") from None
     rate = result.n_collisions / result.wall_time_s if result.wall_time_s > 0 else float("nan")
     print(f"{scene.describe()}")
     print(f"{result.status.value}: {result.message}")
@@ -190,6 +207,38 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
+def _max_events(text):
+    if text is None:
+        return ...
+    if text.strip().lower() == "none":
+        return None
+    n = _collision_count(text, "--max-events")
+    if n < 1:
+        raise BadInput("--max-events", f"must be >= 1 (or 'none'), got {text}")
+    return n
+
+
+def _out_dir(text: str) -> Path:
+    """--out: a directory path (created if missing)."""
+    if not text or not text.strip():
+        raise BadInput("--out", "must name a directory, got an empty string")
+    out = Path(text)
+    if out.exists() and not out.is_dir():
+        raise BadInput("--out", f"{out} exists and is not a directory")
+    return out
+
+
+def _writable(out: Path) -> None:
+    """Create ``out`` and check that files can be written in it (after every other input is checked)."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".heyroll-write-test"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise BadInput("--out", f"cannot write to {out}: {exc.strerror or exc}") from None
+
+
 def _path_scene(path: str, command: str) -> Scene:
     """The scene of ``heyroll equilibria`` / ``portrait``: any track (on a circle the
     coordinate is phi in [-pi, pi), periodic, with no limiters)."""
@@ -233,9 +282,8 @@ def _portrait(args) -> int:
     if args.omega_max is not None:
         top = _positive_number(args.omega_max, "--omega-max")
         omegas = np.linspace(0.0, top, 121)
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise BadInput("--out", f"{out} exists and is not a directory")
+    out = _out_dir(args.out)
+    _writable(out)
     data = write_portrait(scene, out, scene_source=args.scene, body=body, omegas=omegas)
     for e in data["equilibria"]:
         print(f"{e['type']:>7} at x = {e['x']:.17g} ({data['coordinate']} = {e['q']:.17g})")
@@ -264,9 +312,8 @@ def _validate(args) -> int:
     if collisions < 1:
         raise BadInput("--collisions", "must be >= 1")
     scene = load_scene(args.scene) if args.scene else default_scene()
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise BadInput("--out", f"{out} exists and is not a directory")
+    out = _out_dir(args.out)
+    _writable(out)
     from .report import validate
 
     path = validate(scene, out, source=args.scene or "<default scene>", collisions=collisions)

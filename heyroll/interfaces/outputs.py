@@ -156,6 +156,29 @@ def summary_dict(result: SimulationResult, *, scene_source: str, files: dict) ->
     return data
 
 
+#: The files a run writes (and their temporary names): what a new run in the same directory replaces.
+RUN_FILES = ("collisions.csv", "collisions.npy", "passages.csv", "summary.json", "phase_portrait.png", "energy.png")
+
+
+def prepare_run_directory(out_dir: Path) -> None:
+    """Make ``out_dir`` ready for a run: created, and without an earlier run's outputs.
+
+    A run replaces every output of an earlier heyroll run in the directory
+    (RUN_FILES and their temporary files), so that no stale table or figure
+    sits beside the new ones; other files are left alone. Raises OSError.
+    """
+    out_dir.mkdir(parents=True, exist_ok=True)
+    remove_run_files(out_dir)
+
+
+def remove_run_files(out_dir: Path) -> None:
+    """Delete a run's outputs (complete or partial) from ``out_dir``."""
+    for name in RUN_FILES:
+        for path in (out_dir / name, out_dir / f".{name}.tmp"):
+            if path.is_file():
+                path.unlink()
+
+
 def table_sink(out_dir: Path, table_format: str = "csv") -> _TableFile:
     """A sink that streams the run's collision table into ``out_dir``."""
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -27,6 +27,7 @@ from .compiled_cache import CompiledCache
 from .precision import Precision
 from .result import SimulationResult, Status
 from .contact_function import BODY_VALUES, body_function, evaluate
+from .resolve.bounds import parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
 from .system import (
     SceneSystem, Unit, build_system, cluster_unit, link_bodies, singleton_units_of, gap_value, overlap_tolerance, piece_of, singleton_units,
@@ -55,6 +56,10 @@ class CollisionSink(Protocol):
     def close(self) -> None:
         """Called once at the end of the run (also after an interruption)."""
 
+    # Optional: ``rows``, the number of records the sink has taken so far. With it, a Ctrl-C
+    # that lands inside ``write`` is resolved exactly (the chunk is written once); without it
+    # the driver takes an interrupted write as not done and hands the chunk on again at the end.
+
 
 @dataclass(frozen=True)
 class ModeChange:
@@ -75,6 +80,11 @@ class OptionsError(ValueError):
         super().__init__(f"{field}: {rule}")
 
 
+#: Events (collisions, passages, mode changes) a run may have unless told otherwise: about
+#: 25 s of collisions on the default scene, and a bound on the passages kept in memory (~0.4 kB each).
+DEFAULT_MAX_EVENTS = 2_000_000
+
+
 @dataclass(frozen=True)
 class RunOptions:
     """How to run a scene; every field defaults to the scene's own setting or the engine's default.
@@ -90,7 +100,12 @@ class RunOptions:
     ``watch_all_contacts`` also watches pairs the scene's energy cannot
     bring together; ``chunk_size`` collisions are handed to a sink at a
     time; ``dense`` keeps heyoka's continuous output of the whole run
-    (``SimulationResult.dense``, for figures; memory grows with the run).
+    (``SimulationResult.dense``, for figures; memory grows with the run);
+    ``max_events`` bounds every kind of event together (collisions, junction
+    passages, limiter impacts, contact mode changes; ``...`` for
+    DEFAULT_MAX_EVENTS, ``None`` for no limit): a run whose events pile up (a
+    body flung against a limiter at Omega = 1e6 rad/s) stops there with status
+    ``max_events`` instead of filling the memory with passages.
     """
 
     t_end: object = None
@@ -101,6 +116,7 @@ class RunOptions:
     watch_all_contacts: bool = False
     chunk_size: int = 65536
     dense: bool = False
+    max_events: object = ...
 
     def __post_init__(self):
         if self.t_end is not None:
@@ -123,6 +139,10 @@ class RunOptions:
                 raise OptionsError("tolerance", f"must be a finite number > 0, got {self.tolerance!r}")
         if isinstance(self.precision, str):
             object.__setattr__(self, "precision", Precision.parse(self.precision))
+        events = self.max_events
+        if events is not ... and events is not None and (
+                isinstance(events, bool) or not isinstance(events, (int, np.integer)) or events < 1):
+            raise OptionsError("max_events", f"must be a whole number >= 1 or None, got {events!r}")
         if isinstance(self.chunk_size, bool) or not isinstance(self.chunk_size, int) or self.chunk_size < 1:
             raise OptionsError("chunk_size", f"must be a whole number >= 1, got {self.chunk_size!r}")
 
@@ -173,7 +193,10 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         options["tol"] = precision.number(tolerance)
     time_scale = motion_time_scale(scene)
 
-    log = CollisionLog(max_collisions=limit)
+    events = DEFAULT_MAX_EVENTS if opts.max_events is ... else opts.max_events
+    # Collisions stop at whichever limit comes first; passages and mode changes check max_events.
+    collision_limit = limit if events is None else events if limit is None else min(limit, events)
+    log = CollisionLog(max_collisions=collision_limit, max_events=events)
     stream = _Stream(log, sink, progress, len(scene.bodies))
     if sink is not None:
         sink.open(scene, scene.pairs, precision)
@@ -217,16 +240,17 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale, pieces)
         ta, slots, nt_slots = _integrator(system, options, precision.number(precision.epsilon * time_scale))
         slots[:], nt_slots[:] = handlers, warnings
-        ta.pars[:] = system.parameters[: len(ta.pars)]  # heyoka keeps those up to the last one used
+        params = parameters_on_pieces(scene, system, pieces) if system.piece_blocks else list(system.parameters)
+        ta.pars[:] = params[: len(ta.pars)]  # heyoka keeps those up to the last one used
         if system.per_body and (system.links or any(u.pinned for u in units)):
-            full_state = project_onto_contacts(system, full_state, system.parameters)
+            full_state = project_onto_contacts(system, full_state, params)
         ta.state[:] = system.reduce(full_state)
         ta.dtime = t
         if slots:
             ta.reset_cooldowns()
         # The full parameter vector (compiled contact functions may read some that the
         # integrator does not keep); the junction callbacks update it and the integrator's.
-        holder[0], holder[1] = ta.state, np.array(system.parameters)
+        holder[0], holder[1] = ta.state, np.array(params)
         stream.ta = ta
         _reset(log.stop)
         # Pairs touching as the mode starts (bodies that start so, the rest of a
@@ -241,7 +265,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
             if overlap:
                 log.stop.reason, log.stop.message = "overlap", overlap
             else:
-                outcome, n_steps = _propagate(ta, log, precision.number(t_end), dense)
+                outcome, n_steps = _propagate(ta, log, precision.number(t_end), dense,
+                                              None if system.per_body or system.n_units == len(scene.bodies) else system.expand)
                 steps += n_steps
         full_state = system.expand(ta.state.tolist())
         t = ta.dtime
@@ -283,11 +308,17 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         else:
             break
         modes.append(ModeChange(float(t[0]), _clusters(units), tuple(full_state), _pinned(units)))
+        log.mode_changes += 1
+        if log.events_exhausted():
+            break
 
     t_final = t[0] + t[1] if precision.name != "double" else float(t[0]) + float(t[1])
     for (i, j), t_start in contacts_open.items():
         intervals.append({"i": i + 1, "j": j + 1, "t_start": t_start, "t_end": float(t_final), "open": True})
     intervals.sort(key=lambda d: (d["t_start"], d["i"]))
+    if log.stop.reason == "max_collisions" and events is not None and log.count >= events and (
+            limit is None or limit > events):
+        log.events_exhausted()  # the collisions reached max_events, not max_collisions
     status, message = _status(log, outcome, t_end)
     final_state = np.array(full_state)
     if status.success:
@@ -330,6 +361,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
             "high_accuracy": high_accuracy,
             "t_end": float(t_end),
             "max_collisions": limit,
+            "max_events": events,
             "on_inconsistent": scene.on_inconsistent,
             "inconsistent_collisions": log.fallbacks,
             "track_sides": scene.track_sides,
@@ -349,7 +381,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
 STEP_CHUNK = 1 << 16
 
 
-def _propagate(ta, log, t_end, dense=None):
+def _propagate(ta, log, t_end, dense=None, expand=None):
     """propagate_until with the cyclic GC off and Ctrl-C turned into a clean stop.
 
     In chunks of STEP_CHUNK steps: a chunk that leaves the time where it was
@@ -370,7 +402,7 @@ def _propagate(ta, log, t_end, dense=None):
             else:
                 result = ta.propagate_until(t_end, max_steps=STEP_CHUNK, c_output=True)
                 if result[4] is not None:
-                    dense.append((float(t0), float(ta.time), result[4]))
+                    dense.append((float(t0), float(ta.time), result[4], expand))
             steps += int(result[3])
             if result[0] != hy.taylor_outcome.step_limit:
                 return result[0], steps
@@ -572,7 +604,19 @@ class _Stream:
         if self.sink is None or not log.records:
             return
         chunk = records_to_arrays(log.records, self.n_bodies)
-        self.sink.write(chunk, first_number=log.flushed + 1)
+        rows = getattr(self.sink, "rows", None)
+        try:
+            self.sink.write(chunk, first_number=log.flushed + 1)
+        except BaseException:
+            # Ctrl-C inside the write: a chunk the sink took (its row count moved) must not be
+            # written again by the final flush (measured: a chunk twice), one it did not take must.
+            if rows is not None and self.sink.rows > rows:
+                self._taken(chunk)
+            raise
+        self._taken(chunk)
+
+    def _taken(self, chunk) -> None:
+        log = self.log
         if self.kept is None:
             self.kept = chunk
         log.flushed += len(log.records)
@@ -592,6 +636,8 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
     reason = log.stop.reason
     if reason == "max_collisions":
         return Status.MAX_COLLISIONS, log.stop.message
+    if reason == "max_events":
+        return Status.MAX_EVENTS, log.stop.message
     if reason == "inconsistent":
         return Status.INCONSISTENT, log.stop.message
     if reason == "interrupted":

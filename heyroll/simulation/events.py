@@ -80,6 +80,19 @@ class CollisionLog:
     #: Junction passages and limiter impacts: (t, body, kind, piece from, piece to, q, q' before, q' after),
     #: kind an index into resolve.bounds.PASSAGE_KINDS (0-based bodies and pieces).
     passages: list = field(default_factory=list)
+    #: The bound on every kind of event together (RunOptions.max_events), and the mode changes so far.
+    max_events: int | None = None
+    mode_changes: int = 0
+
+    def events_exhausted(self) -> bool:
+        """Whether collisions, passages and mode changes together reached max_events (sets the stop)."""
+        if self.max_events is None or self.count + len(self.passages) + self.mode_changes < self.max_events:
+            return False
+        self.stop.reason = "max_events"
+        self.stop.message = (f"stopped after max_events = {self.max_events} events ({self.count} collisions, "
+                             f"{len(self.passages)} junction passages and limiter impacts, {self.mode_changes} "
+                             "contact mode changes); raise it with --max-events N (RunOptions.max_events)")
+        return True
 
     @property
     def count(self) -> int:

@@ -14,13 +14,14 @@ from .precision import Precision
 
 
 class Status(str, Enum):
-    """How a run ended. ``completed`` and ``max_collisions`` are successes.
+    """How a run ended. ``completed``, ``max_collisions`` and ``max_events`` are successes.
 
     Each member carries its meaning (``meaning``) and the CLI's exit code (``exit_code``).
     """
 
     COMPLETED = "completed"
     MAX_COLLISIONS = "max_collisions"
+    MAX_EVENTS = "max_events"
     INCONSISTENT = "inconsistent_collision"
     INTERRUPTED = "interrupted"
     LEFT_TRACK = "left_track"
@@ -30,7 +31,7 @@ class Status(str, Enum):
 
     @property
     def success(self) -> bool:
-        return self in (Status.COMPLETED, Status.MAX_COLLISIONS)
+        return self in (Status.COMPLETED, Status.MAX_COLLISIONS, Status.MAX_EVENTS)
 
     @property
     def meaning(self) -> str:
@@ -44,6 +45,7 @@ class Status(str, Enum):
 _MEANINGS = {
     Status.COMPLETED: "reached t_end",
     Status.MAX_COLLISIONS: "stopped after the scene's or the run's max_collisions",
+    Status.MAX_EVENTS: "stopped after max_events events (collisions, junction passages, limiter impacts, mode changes)",
     Status.INCONSISTENT: "the law's outcome would leave two bodies approaching (on_inconsistent = 'error')",
     Status.INTERRUPTED: "stopped by Ctrl-C or SIGTERM; the table holds every collision before the stop",
     Status.LEFT_TRACK: "a body would leave a one-sided track (its normal force reached 0)",
@@ -68,7 +70,7 @@ INTEGER_COLUMNS = ("n", "i", "j", "law_flag")
 
 #: law_flag values: which law resolved the collision.
 LAW_FLAGS = {0: "the scene's law", 1: "fallback: Newton's law on the gap rate (the scene's law left the bodies approaching)",
-             2: "Newton's law on psi' between units (a cluster in persistent contact took part)"}
+             2: "Newton's law on the gap rate between units (a cluster in persistent contact, or a body resting on a limiter, took part)"}
 
 
 @dataclass(frozen=True)
@@ -302,10 +304,12 @@ class SimulationResult:
         out = np.empty((n_points, 2 * self.n_bodies))
         starts = np.array([d[0] for d in self.dense])
         idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.dense) - 1)
-        for k, (t0, t1, c_out) in enumerate(self.dense):
+        for k, (t0, t1, c_out, expand) in enumerate(self.dense):
             sel = idx == k
             if np.any(sel):
-                out[sel] = np.asarray(c_out(np.clip(t[sel], t0, t1)), dtype=float)
+                values = np.asarray(c_out(np.clip(t[sel], t0, t1)), dtype=float)
+                # A mode with clusters on the circle integrates one angle per unit: back to every body.
+                out[sel] = values if expand is None else np.array([expand(row) for row in values.tolist()])
         return t, out
 
     @property

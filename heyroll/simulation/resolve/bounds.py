@@ -30,6 +30,23 @@ from ..system import piece_bounds
 PASSAGE_KINDS = ("junction", "limiter_lower", "limiter_upper")
 
 
+def parameters_on_pieces(scene, system, pieces) -> list:
+    """The mode's parameter values with each body's piece block set to the piece it is on now.
+
+    A system is built with the pieces of the scene's start; a new contact mode
+    (a merge, a split, a body coming to rest) starts wherever the bodies are.
+    """
+    params = list(system.parameters)
+    num = system.precision.number
+    for block in system.piece_blocks:
+        body = scene.bodies[block.body]
+        lo, hi = piece_bounds(scene.track, body, pieces[block.body])
+        params[block.lower], params[block.lower + 1] = num(lo), num(hi)
+        values = scene.track.piece_parameters(body, pieces[block.body])
+        params[block.first:block.first + len(values)] = [num(v) for v in values]
+    return params
+
+
 def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, function):
     """The callback of a piece end; ``pieces[k]`` is the piece body k is on (kept per run)."""
     k = event.body
@@ -66,11 +83,13 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
             kept = ta.pars  # heyoka keeps the parameters up to the last one its equations and events use
             kept[:] = pars[: len(kept)]
             log.passages.append((t, k, 0, piece, new, q, v, v))
-            return True
+            return not log.events_exhausted()
         v_new = -k_lim * v
         s[nu + u] = v_new
         s[u] = q - margin if upper else q + margin
         log.passages.append((t, k, 2 if upper else 1, piece, piece, q, v, v_new))
+        if log.events_exhausted():
+            return False
         # Resting on the stop: the rebounds left are below the run's resolution
         # while the track pushes the body onto it (as for a pair, events.below_resolution).
         if function is not None:

@@ -86,7 +86,7 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
                 records.append((t, contact.pair_index, before, None, s.tolist(), 2))
                 if limit is not None and log.count >= limit:
                     return stop_at_max_collisions(stop, limit)
-                return True
+                return not log.events_exhausted()
         ci = ci1 * si**ps if ps else ci1
         cj = cj1 * sj**ps if ps else cj1
         Mi = Mi1 * si**pm if pm else Mi1
@@ -118,6 +118,8 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         s[nu + a], s[nu + b] = vi_new, vj_new
         if limit is not None and log.count >= limit:
             return stop_at_max_collisions(stop, limit)
+        if log.events_exhausted():
+            return False
         if held is not None:
             stop.reason, stop.data = "release", {"bodies": tuple(held)}
             return False
