@@ -532,3 +532,20 @@ def test_a_body_pressed_against_a_plastic_limiter_comes_to_rest_on_it():
     assert len(result.limiter_impacts) == 1
     assert result.mode_changes[-1].pinned == (((1,), "lower"),)
     assert float(result.final_state[1]) == 0.0 and abs(float(result.final_state[0]) + 1.5) < 1e-12
+
+
+def test_a_flat_track_has_one_neutral_stretch_not_a_saddle_per_grid_node(tmp_path, capsys):
+    # measured before the fix: y = 0.1 listed 19,999 "saddles" and `heyroll portrait` ended in a
+    # matplotlib traceback (contour levels of a constant surface).
+    path = tmp_path / "flat.toml"
+    path.write_text('[track]\ntype = "curve"\ny = "0.1"\nx_min = -1\nx_max = 1\n\n'
+                    '[[bodies]]\nshape = "disk"\nradius = 0.05\nmass = 1.0\nx = 0.3\ndx = 0.0\n')
+    assert main(["equilibria", str(path), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == [{"x": -1.0, "type": "neutral", "x_end": 1.0}]
+    assert main(["portrait", str(path), "--out", str(tmp_path / "p")]) == 0
+    data = json.loads((tmp_path / "p" / "portrait.json").read_text())
+    assert [e["type"] for e in data["equilibria"]] == ["neutral"]
+    # Turning about x = 0.2 the same flat track has one saddle there (a maximum of -Omega^2 (x - a)^2 / 2).
+    turning = EquilibriumProblem(CurveTrack.make("0.1", "-1", "1"), DISK, Frame.make("2", "0.2"))
+    eq = find_equilibria(turning)
+    assert [e.type for e in eq] == ["saddle"] and abs(eq[0].x - 0.2) < 1e-15

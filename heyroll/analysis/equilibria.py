@@ -49,7 +49,7 @@ BRACKET_SAMPLES = 20001
 
 @dataclass(frozen=True)
 class Equilibrium:
-    """A relative equilibrium: contact abscissa x, coordinate q, centre or saddle."""
+    """A relative equilibrium: contact abscissa x, coordinate q, centre, saddle or neutral (a stretch to x_end)."""
 
     x: float
     q: float
@@ -59,9 +59,15 @@ class Equilibrium:
     stiffness: float
     #: effective potential per unit mass, V/m, at the equilibrium (J/kg)
     potential: float
+    #: A neutral stretch (type "neutral": h = 0 all along a flat, fixed track) ends here.
+    x_end: float | None = None
+    q_end: float | None = None
 
     def as_json(self) -> dict:
-        return {"x": self.x, "type": self.type}
+        data = {"x": self.x, "type": self.type}
+        if self.x_end is not None:
+            data["x_end"] = self.x_end
+        return data
 
 
 @dataclass(frozen=True)
@@ -196,6 +202,24 @@ def find_equilibria(problem: EquilibriumProblem, samples: int = BRACKET_SAMPLES)
     values = problem.h(grid)
     if problem.periodic:
         values[-1] = values[0]  # pi and -pi are one point: one h there, so the wrap bracket is closed
+    # A neutral stretch (a flat, fixed track: h = 0 all along) is one neutral equilibrium, not a
+    # saddle at every grid node: runs of nodes where h vanishes to rounding.
+    scale = problem.g + float(problem.frame.omega) ** 2 * (hi - lo + abs(float(problem.frame.axis_x)))
+    flat = np.abs(values) <= 64 * np.finfo(float).eps * scale
+    stretches, inside = [], np.zeros(len(grid), dtype=bool)
+    k = 0
+    while k < len(grid):
+        if flat[k]:
+            end = k
+            while end + 1 < len(grid) and flat[end + 1]:
+                end += 1
+            if end > k:
+                stretches.append((grid[k], grid[end]))
+                inside[k:end + 1] = True
+            k = end + 1
+        else:
+            k += 1
+    values = np.where(inside, 1.0, values)  # no brackets inside a neutral stretch
     roots = []
     for k in np.flatnonzero(values[:-1] * values[1:] <= 0):
         a, b, fa = grid[k], grid[k + 1], values[k]
@@ -217,6 +241,12 @@ def find_equilibria(problem: EquilibriumProblem, samples: int = BRACKET_SAMPLES)
             x=float(np.atleast_1d(problem.contact_x(q))[0]),
             q=float(q), type="center" if stiffness > 0 else "saddle", stiffness=stiffness,
             potential=float(np.atleast_1d(problem.potential(q))[0]),
+        ))
+    for a, b in stretches:
+        out.append(Equilibrium(
+            x=float(np.atleast_1d(problem.contact_x(a))[0]), q=float(a), type="neutral", stiffness=0.0,
+            potential=float(np.atleast_1d(problem.potential(a))[0]),
+            x_end=float(np.atleast_1d(problem.contact_x(b))[0]), q_end=float(b),
         ))
     return sorted(out, key=(lambda e: e.q) if problem.periodic else (lambda e: e.x))
 

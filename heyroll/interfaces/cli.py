@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import math
 import signal
 import sys
@@ -136,7 +137,7 @@ def _run(args) -> int:
     prepare_run_directory(out)
     try:
         sink = table_sink(out, args.table)
-        with _progress_bar(args.progress, scene, t_end) as progress, _sigterm_as_interrupt():
+        with _progress_bar(args.progress, scene, t_end) as progress, _sigterm_as_interrupt(), _heyoka_messages():
             result = simulate(
                 scene, t_end=t_end, max_collisions=max_collisions, max_events=max_events, precision=precision,
                 high_accuracy=args.high_accuracy, sink=sink, progress=progress,
@@ -163,6 +164,33 @@ def _run(args) -> int:
     )
     print(f"wrote {out}/")
     return result.status.exit_code
+
+
+@contextlib.contextmanager
+def _heyoka_messages():
+    """heyoka's C++ logger writes its warnings on stdout, into heyroll's own output: while the
+    engine runs, file descriptor 1 goes to a temporary file; its lines are then repeated on
+    stderr as 'heyroll: heyoka: ...' (stdout keeps only heyroll's report)."""
+    import tempfile
+
+    sys.stdout.flush()
+    try:
+        saved = os.dup(1)
+    except OSError:  # no real stdout (embedded): nothing to route
+        yield
+        return
+    with tempfile.TemporaryFile() as captured:
+        os.dup2(captured.fileno(), 1)
+        try:
+            yield
+        finally:
+            sys.stdout.flush()
+            os.dup2(saved, 1)
+            os.close(saved)
+            captured.seek(0)
+            for line in captured.read().decode(errors="replace").splitlines():
+                if line.strip():
+                    print(f"heyroll: heyoka: {line.strip()}", file=sys.stderr)
 
 
 @contextlib.contextmanager
@@ -267,7 +295,8 @@ def _equilibria(args) -> int:
           f"axis x = {float(scene.frame.axis_x):.17g} m")
     print(f"{'x':>24} {'type':>7} {scene.coordinate:>24} {'stiffness h_q':>24} {'V/m (J/kg)':>24}")
     for e in eq:
-        print(f"{e.x:24.17g} {e.type:>7} {e.q:24.17g} {e.stiffness:24.17g} {e.potential:24.17g}")
+        print(f"{e.x:24.17g} {e.type:>7} {e.q:24.17g} {e.stiffness:24.17g} {e.potential:24.17g}"
+              + (f"  (a neutral stretch to x = {e.x_end:.17g})" if e.x_end is not None else ""))
     return EXIT_OK
 
 
@@ -286,7 +315,8 @@ def _portrait(args) -> int:
     _writable(out)
     data = write_portrait(scene, out, scene_source=args.scene, body=body, omegas=omegas)
     for e in data["equilibria"]:
-        print(f"{e['type']:>7} at x = {e['x']:.17g} ({data['coordinate']} = {e['q']:.17g})")
+        print(f"{e['type']:>7} at x = {e['x']:.17g} ({data['coordinate']} = {e['q']:.17g})"
+              + (f" to x = {e['x_end']:.17g}" if e.get("x_end") is not None else ""))
     for b in data["bifurcations"]:
         print(f"bifurcation at Omega = {b['omega']:.17g} rad/s near x = {b['x']:.6g} "
               f"({data['coordinate']} = {b['q']:.6g}): "

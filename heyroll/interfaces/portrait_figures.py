@@ -60,7 +60,10 @@ def _velocity_range(scene: Scene, body: int, q: np.ndarray, problem: Equilibrium
     V = problem.potential(q)
     F = speed_factor(scene, body, q) ** 2
     kappa = float(scene.bodies[body].kappa)
-    return 1.15 * float(np.sqrt(2 * (V.max() - V.min()) / (kappa * F.min())))
+    spread = float(V.max() - V.min())
+    if not spread > 0:  # a flat, fixed track: no potential to scale by; the body's own speed (or 1 unit)
+        return 1.15 * max(abs(float(scene.dq[body])), 1.0)
+    return 1.15 * float(np.sqrt(2 * spread / (kappa * F.min())))
 
 
 def _wrapped(q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -101,7 +104,10 @@ def portrait_figure(scene: Scene, path, *, body: int = 0, trajectories: int = 4,
     eq = find_equilibria(problem)
     fig = Figure(figsize=(10, 6))
     ax = fig.add_subplot()
-    levels = np.linspace(np.nanmin(H), np.nanpercentile(H, 70), 28)
+    low, high = np.nanmin(H), np.nanpercentile(H, 70)
+    if not high > low:  # a flat, fixed track: H is the kinetic energy only, levels by the speed alone
+        high = np.nanmax(H) if np.nanmax(H) > low else low + 1.0
+    levels = np.linspace(low, high, 28)
     ax.contour(q, v, H, levels=levels, colors="0.6", linewidths=0.6, negative_linestyles="solid")
     saddle_levels = sorted({e.potential for e in eq if e.type == "saddle"})
     if saddle_levels:
