@@ -6,6 +6,13 @@ ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "disk_and_ring.toml"
 
 
+def arc_chain_segments() -> str:
+    """The [[track.segments]] tables of examples/arc_chain.toml (a line, a concave and a convex arc)."""
+    text = (ROOT / "examples" / "arc_chain.toml").read_text()
+    start = text.index("[[track.segments]]")
+    return text[start:text.index("[[bodies]]")].strip() + "\n"
+
+
 @pytest.fixture
 def example_text() -> str:
     return EXAMPLE.read_text(encoding="utf-8")

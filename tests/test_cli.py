@@ -4,6 +4,7 @@ import csv
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -145,3 +146,69 @@ def test_validate_writes_a_report_with_every_section(tmp_path):
     assert "pair sequence identical" in report
     for png in ("energy.png", "phase_portrait.png", "series_error.png", "horizon.png", "lyapunov.png"):
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_run_replaces_an_earlier_runs_outputs_and_leaves_other_files(tmp_path):
+    # measured before: an old collisions.npy and old figures stayed beside a new collisions.csv
+    out = tmp_path / "out"
+    out.mkdir()
+    for name in ("collisions.npy", "energy.png", "phase_portrait.png", "passages.csv", ".collisions.csv.tmp"):
+        (out / name).write_text("stale")
+    (out / "notes.txt").write_text("mine")
+    assert main(["run", "--out", str(out), "--t-end", "2", "--no-figures", "--progress", "off"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["collisions.csv", "notes.txt", "summary.json"]
+
+
+@pytest.mark.parametrize("out", ["", "   ", "/dev/null/sub", "/proc/heyroll-cannot-create"])
+def test_an_out_directory_that_cannot_be_written_is_one_line_exit_2(out, capsys):
+    assert main(["run", "--out", out, "--t-end", "1", "--no-figures", "--progress", "off"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("heyroll: error: --out:"), err
+
+
+def test_an_io_error_while_writing_leaves_no_half_written_set(tmp_path, capsys, monkeypatch):
+    # A full disk while the summary is written (simulated): one line, exit 2, no outputs kept.
+    from heyroll.interfaces import outputs
+
+    def full(path, text):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(outputs, "atomic_write_text", full)
+    out = tmp_path / "out"
+    assert main(["run", "--out", str(out), "--t-end", "2", "--no-figures", "--progress", "off"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "No space left on device" in err[0]
+    assert list(out.iterdir()) == []
+
+
+def test_no_command_prints_the_usage_and_exits_2(capsys):
+    assert main([]) == 2
+    err = capsys.readouterr().err
+    assert "usage: heyroll" in err and "run" in err and err.strip().endswith("a command is required")
+
+
+def test_max_events_stops_a_run_whose_events_pile_up(tmp_path):
+    out = tmp_path / "out"
+    chain = str(Path(__file__).resolve().parent.parent / "examples" / "arc_chain.toml")
+    assert main(["run", chain, "--out", str(out), "--max-events", "5",
+                 "--no-figures", "--progress", "off"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "max_events" and summary["limiter_impacts"] + summary["junction_passages"] == 5
+    assert main(["run", "--out", str(out), "--max-events", "0", "--progress", "off"]) == 2
+
+
+def test_drawn_branches_are_pieces_of_the_run_ending_at_the_next_collision():
+    # measured before the fix: the figure's last branch (after collision 30) was integrated
+    # without collision events to t_end, and the two balls passed through each other on it.
+    from heyroll.interfaces.scene_file import default_scene
+    from heyroll.simulation.trajectory import sample_branches
+
+    scene = default_scene()
+    result = heyroll.simulate(scene, t_end=60.0)
+    assert result.n_collisions > 31
+    branches = sample_branches(result, max_branches=31)
+    assert len(branches) == 31
+    assert branches[-1].times[-1] == pytest.approx(float(result.times[30]), abs=1e-12)
+    for b in branches:
+        gaps = scene.gap(0, 1, b.states[:, 0], b.states[:, 1])
+        assert gaps.min() > -1e-9

@@ -35,28 +35,11 @@ from heyroll.interfaces.scene_file import parse_scene
 from heyroll.simulation.precision import Precision
 from heyroll.simulation.result import INTEGER_COLUMNS, TABLE_COLUMNS, Status
 
+from conftest import arc_chain_segments
+
 # -- the scenes: one per track type ------------------------------------------------------------
 
-ARC_SEGMENTS = """
-[[track.segments]]
-kind = "line"
-angle = -0.5
-length = 1.0
-
-[[track.segments]]
-kind = "arc"
-radius = 1.0
-side = "concave"
-start = -0.5
-end = 1.2
-
-[[track.segments]]
-kind = "arc"
-radius = 0.6
-side = "convex"
-start = -1.2
-end = 0.9
-"""
+ARC_SEGMENTS = "\n" + arc_chain_segments()
 
 #: Per track type: the [track] table, its segments, a [frame] and two bodies (TOML values as text).
 #: "coordinate": the body key that places body 1 on the track; "outside": a value of it off the track.

@@ -123,3 +123,30 @@ def test_not_toml_is_a_scene_file_error(tmp_path):
         heyroll.load_scene(path)
     with pytest.raises(SceneFileError, match="no such scene file"):
         heyroll.load_scene(tmp_path / "missing.toml")
+
+
+HOSTILE_CURVE = '[track]\ntype = "curve"\ny = "{y}"\nx_min = -1\nx_max = 1\n\n[[bodies]]\nshape = "disk"\nradius = 0.05\n' \
+                'mass = 1.0\nx = 0.3\ndx = 0.0\n'
+HOSTILE_CIRCLE = '[track]\ntype = "circle"\nradius = {R}\n\n[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\n' \
+                 'mass = 1.0\nphi = 0.3\ndphi = {dphi}\n'
+
+
+@pytest.mark.parametrize("text, field", [
+    (HOSTILE_CURVE.format(y="1/0"), "track.y"),                       # was ZeroDivisionError
+    (HOSTILE_CURVE.format(y="2**10000*x**2"), "track.y"),             # was OverflowError
+    (HOSTILE_CURVE.format(y="+".join(["x"] * 20000)), "track.y"),     # was RecursionError
+    (HOSTILE_CURVE.format(y="(" * 3000 + "x" + ")" * 3000), "track.y"),  # a 3,002-line traceback
+    (HOSTILE_CURVE.format(y="+".join(["x"] * 300)), "track.y"),       # short, but 300 terms deep
+    (HOSTILE_CURVE.format(y="(" * 60 + "x" + ")" * 60), "track.y"),
+    (HOSTILE_CIRCLE.format(R="1e308", dphi="0"), "track.radius"),     # ran to 'completed', inf energies
+    (HOSTILE_CIRCLE.format(R="1", dphi="1e200"), "bodies[1].dphi"),   # a traceback, a header-only table
+])
+def test_hostile_scenes_are_one_line_exit_2_and_nothing_written(text, field, tmp_path, capsys):
+    from heyroll.interfaces.cli import main
+
+    path, out = tmp_path / "s.toml", tmp_path / "out"
+    path.write_text(text)
+    assert main(["run", str(path), "--out", str(out), "--no-figures", "--progress", "off"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"heyroll: error: {field}:"), err
+    assert not out.exists()

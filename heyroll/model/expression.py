@@ -65,16 +65,46 @@ class ExpressionError(SceneError):
     """A track expression breaks the grammar."""
 
 
+#: Limits that keep a hostile expression from exhausting the parser or the recursion in
+#: evaluation and differentiation (measured: 20,000 terms or 3,000 nested parentheses
+#: ended in RecursionError): characters, and the depth of the expression tree.
+MAX_EXPRESSION_LENGTH = 2000
+MAX_EXPRESSION_DEPTH = 100
+
+
 def parse(text: str, field: str = "track.y") -> Node:
     """Parse ``text`` into an expression tree; raises ExpressionError (a SceneError)."""
     if not isinstance(text, str):
         raise ExpressionError(field, f"must be a string expression in x, got {text!r}")
+    if len(text) > MAX_EXPRESSION_LENGTH:
+        raise ExpressionError(field, f"is {len(text)} characters long; at most {MAX_EXPRESSION_LENGTH} are allowed")
     tokens = _tokenize(text, field)
+    depth = deepest = 0
+    for kind, value in tokens:
+        depth += value == "(" and 1 or value == ")" and -1 or 0
+        deepest = max(deepest, depth)
+    if deepest > MAX_EXPRESSION_DEPTH // 2:
+        raise ExpressionError(field, f"nests parentheses {deepest} deep; at most {MAX_EXPRESSION_DEPTH // 2} are allowed")
     parser = _Parser(tokens, field, text)
     node = parser.expression()
     if parser.pos != len(tokens):
         raise ExpressionError(field, f"unexpected {tokens[parser.pos][1]!r} in {text!r}")
+    if _depth(node) > MAX_EXPRESSION_DEPTH:
+        raise ExpressionError(field, f"is nested more than {MAX_EXPRESSION_DEPTH} operations deep (a chain of "
+                              "that many terms or factors); write it shorter")
     return node
+
+
+def _depth(node: Node) -> int:
+    """Depth of an expression tree, without recursion."""
+    deepest, stack = 0, [(node, 1)]
+    while stack:
+        n, d = stack.pop()
+        deepest = max(deepest, d)
+        for child in (getattr(n, "left", None), getattr(n, "right", None), getattr(n, "arg", None)):
+            if child is not None:
+                stack.append((child, d + 1))
+    return deepest
 
 
 def _tokenize(text: str, field: str) -> list[tuple[str, str]]:

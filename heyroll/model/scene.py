@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import math
+
 import mpmath
 import numpy as np
 
@@ -169,9 +171,30 @@ class Scene:
             track_friction=mu, on_inconsistent=on_inconsistent, track_sides=track_sides, frame=frame,
             limiter_restitution=k_lim,
         )
+        scene._check_finite_energies()
         pairs = scene._linear_gap_pairs() if track.linear_gap else scene._open_pairs()
         object.__setattr__(scene, "pairs", pairs)
         return scene
+
+    def _check_finite_energies(self) -> None:
+        """Refuse scenes whose energies overflow a double (measured: track.radius = 1e308 ran to
+        'completed' with infinite energies and nan in the table; dphi = 1e200 ended in a traceback)."""
+        for n, body in enumerate(self.bodies):
+            if self.track.linear_gap:  # the engine works with G = kappa m rho^2 and W = m g rho in the run's type
+                for name, value in (("generalized mass kappa m (R - r)^2", self.track.generalized_mass(body)),
+                                    ("weight moment m g (R - r)", self.track.weight_moment(body, self.g))):
+                    if not math.isfinite(float(value)):
+                        raise SceneError("track.radius", f"the {name} of body {n + 1} ({mpmath.nstr(value, 6)}) is "
+                                         "not a finite double: the radius, the masses or g are out of range")
+            total = float(self.body_energy(n))
+            at_rest = float(self.body_energy(n, dphi=0))
+            if not math.isfinite(at_rest):
+                where = "track.radius" if self.track.linear_gap else "track"
+                raise SceneError(where, f"the potential energy of body {n + 1} ({at_rest}) is not a finite double: "
+                                 "the track's size, the masses or g are out of range")
+            if not math.isfinite(total):
+                raise SceneError(f"bodies[{n + 1}].d{self.coordinate}",
+                                 f"the kinetic energy of body {n + 1} is not a finite double: the rate is out of range")
 
     # -- names ----------------------------------------------------------------
 

@@ -80,7 +80,7 @@ def _num(value, what: str = "value") -> mpmath.mpf:
 
 # ------------------------------------------------------------ curve evaluator
 
-def compile_expression(text: str):
+def compile_expression(text: str, functions=None):
     """Compile the curve text y(x) into a function of one mpmath number.
 
     Only numbers (decimal literals), the name ``x``, ``+ - * / **``, unary
@@ -88,6 +88,11 @@ def compile_expression(text: str):
     argument are allowed; anything else raises ValueError. Nothing is passed
     to ``eval``: the syntax tree is walked here. Literals are read from their
     source text, at the working precision of each evaluation.
+
+    ``functions`` (default :data:`FUNCTIONS`) maps the four names to the
+    callables used: pass versions that also take other number types (e.g.
+    the truncated Taylor series of :mod:`.path_collisions`) to evaluate the
+    curve on them; ``x`` may then be such a number too.
     """
     if not isinstance(text, str):
         raise ValueError(f"the curve must be a string expression in x, got {text!r}")
@@ -96,10 +101,13 @@ def compile_expression(text: str):
     except SyntaxError as exc:
         raise ValueError(f"cannot parse the curve {text!r}: {exc.msg}") from None
     source = text.strip()
-    return _compile(tree.body, source)
+    table = FUNCTIONS if functions is None else functions
+    if set(table) != set(FUNCTIONS):
+        raise ValueError(f"functions must define exactly {', '.join(FUNCTIONS)}")
+    return _compile(tree.body, source, table)
 
 
-def _compile(node, source: str):
+def _compile(node, source: str, functions=FUNCTIONS):
     if isinstance(node, ast.Constant):
         value = node.value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -107,20 +115,29 @@ def _compile(node, source: str):
         literal = ast.get_source_segment(source, node)
         if literal is None or not _DECIMAL.fullmatch(literal):
             raise ValueError(f"only decimal numbers are allowed in the curve, got {literal!r}")
-        return lambda x: mpmath.mpf(literal)
+        values = {}  # the literal read once per working precision (mpf numbers are immutable)
+
+        def constant(x):
+            prec = mpmath.mp.prec
+            value = values.get(prec)
+            if value is None:
+                value = values[prec] = mpmath.mpf(literal)
+            return value
+
+        return constant
     if isinstance(node, ast.Name):
         if node.id != "x":
             raise ValueError(f"unknown name {node.id!r} in the curve; the only variable is x")
         return lambda x: x
     if isinstance(node, ast.UnaryOp):
-        arg = _compile(node.operand, source)
+        arg = _compile(node.operand, source, functions)
         if isinstance(node.op, ast.USub):
             return lambda x: -arg(x)
         if isinstance(node.op, ast.UAdd):
             return arg
         raise ValueError(f"operator {type(node.op).__name__} is not allowed in the curve")
     if isinstance(node, ast.BinOp):
-        a, b = _compile(node.left, source), _compile(node.right, source)
+        a, b = _compile(node.left, source, functions), _compile(node.right, source, functions)
         op = type(node.op)
         if op is ast.Add:
             return lambda x: a(x) + b(x)
@@ -138,7 +155,7 @@ def _compile(node, source: str):
             raise ValueError(f"only calls of {', '.join(FUNCTIONS)} are allowed in the curve")
         if len(node.args) != 1 or node.keywords or isinstance(node.args[0], ast.Starred):
             raise ValueError(f"{node.func.id} takes exactly one argument")
-        fn, arg = FUNCTIONS[node.func.id], _compile(node.args[0], source)
+        fn, arg = functions[node.func.id], _compile(node.args[0], source, functions)
         return lambda x: fn(arg(x))
     raise ValueError(f"{type(node).__name__} is not allowed in the curve "
                      "(numbers, x, + - * / **, parentheses, sin cos exp sqrt)")
@@ -146,7 +163,7 @@ def _compile(node, source: str):
 
 def _power(base, exponent):
     # a whole exponent stays an exact integer power (and a negative base stays real)
-    if exponent == mpmath.floor(exponent) and abs(exponent) <= 64:
+    if isinstance(exponent, (int, mpmath.mpf)) and exponent == mpmath.floor(exponent) and abs(exponent) <= 64:
         return base ** int(exponent)
     return base**exponent
 
@@ -171,14 +188,16 @@ class _Piece:
     rho: mpmath.mpf    # arcs: radius of the centre's path (R - r or R + r)
     a0: mpmath.mpf     # arcs: start angle (phi or psi); line: direction th
 
-    def centre(self, s):
+    def centre(self, s, sin=mpmath.sin, cos=mpmath.cos):
+        """(x_C, y_C) at s; ``sin`` and ``cos`` of the angle may be replaced by versions
+        that take other number types (s may then be such a number)."""
         u = s - self.s0
         if self.kind == "line":
             return self.ox + u * mpmath.cos(self.a0), self.oy + u * mpmath.sin(self.a0)
         angle = self.a0 + u / self.rho
         if self.kind == "concave":
-            return self.ox + self.rho * mpmath.sin(angle), self.oy - self.rho * mpmath.cos(angle)
-        return self.ox + self.rho * mpmath.sin(angle), self.oy + self.rho * mpmath.cos(angle)
+            return self.ox + self.rho * sin(angle), self.oy - self.rho * cos(angle)
+        return self.ox + self.rho * sin(angle), self.oy + self.rho * cos(angle)
 
 
 def _segments(track: dict):

@@ -402,15 +402,18 @@ def build_system(
                 # sizes its steps on the event functions too, and the square root's branch points
                 # (|D|/|D'| away in complex time) halved the steps as bodies closed in (measured:
                 # 384k steps against 229k on one arc equal to the default circle).
-                d = scene.bodies[i].radius + scene.bodies[j].radius
+                with workprec():  # at the model's precision, not mpmath's global one (quad runs need it)
+                    d = scene.bodies[i].radius + scene.bodies[j].radius
                 if d == 0:
                     gaps.append(gap)
                     guards.append(gap + par(OVERLAP_FLOOR) * (1 + psi[j] * psi[j]))
                 else:
                     dx, dy = terms[j].x_c - terms[i].x_c, terms[j].y_c - terms[i].y_c
-                    gaps.append(hy.sum([dx * dx, dy * dy]) - par(d * d))
+                    with workprec():  # mpmath's global precision may be 15 digits: d^2 exact for quad
+                        d2, tolerance = d * d, 2 * d * OVERLAP_FLOOR
+                    gaps.append(hy.sum([dx * dx, dy * dy]) - par(d2))
                     # |D|^2 - d^2 ~ 2 d gap: the same overlap tolerance in metres (q is bounded on an open track).
-                    guards.append(gaps[-1] + par(2 * d * OVERLAP_FLOOR) * (1 + psi[j] * psi[j]))
+                    guards.append(gaps[-1] + par(tolerance) * (1 + psi[j] * psi[j]))
 
     for u, unit in enumerate(units):
         if per_body or not unit.is_cluster or not events:
@@ -451,6 +454,8 @@ def build_system(
         body_exprs = [[t.x_c, t.y_c, t.normal, t.sigma, t.driving, a] for t, a in zip(terms, accelerations)]
     else:
         body_exprs = [[t.x_c, t.y_c, t.normal, t.sigma, t.driving, t.acceleration] for t in terms] if nu == n else []
+    with workprec():
+        rolling_mass = tuple(b.kappa * b.mass for b in scene.bodies)
     if not events:
         # The bare equations: only the parameters they read (a caller passes them to heyoka,
         # which wants exactly those up to the last one used).
@@ -485,7 +490,7 @@ def build_system(
         linear_gap=track.linear_gap,
         particles=tuple(b.is_particle for b in scene.bodies),
         link_terms=link_terms,
-        rolling_mass=tuple(b.kappa * b.mass for b in scene.bodies),
+        rolling_mass=rolling_mass,
         release_events=tuple(release_events),
         release_expressions=release_exprs,
     )
@@ -510,7 +515,8 @@ def piece_bounds(track, body, piece: int):
 
 def _gap(scene, i, j, ti, tj, qi, qj, par):
     """Distance between the surfaces of bodies i and j (m); q_j - q_i for two particles."""
-    d = scene.bodies[i].radius + scene.bodies[j].radius
+    with workprec():  # at the model's precision, not mpmath's global one (quad runs need it)
+        d = scene.bodies[i].radius + scene.bodies[j].radius
     if d == 0:  # two points of one curve: a signed gap along it
         return qj - qi
     dx, dy = tj.x_c - ti.x_c, tj.y_c - ti.y_c
@@ -616,7 +622,8 @@ def _link_constraint(scene, i, j, terms, q, v, acc, par):
     With D = C_j - C_i: h' = 2 D.D', h'' = 2 (D'.D' + D.D''), D' = C_j' q_j' - C_i' q_i',
     D'' = C_j'' q_j'^2 + C_j' q_j'' - (i). Two particles (r = 0) keep q_j - q_i = 0.
     """
-    d = scene.bodies[i].radius + scene.bodies[j].radius
+    with workprec():  # at the model's precision, not mpmath's global one (quad runs need it)
+        d = scene.bodies[i].radius + scene.bodies[j].radius
     if d == 0:
         return q[j] - q[i], -1.0, 1.0, v[j] - v[i], acc[j] - acc[i]
     (xi1, yi1), (xi2, yi2) = _centre_derivatives(terms[i], q[i])
@@ -625,14 +632,17 @@ def _link_constraint(scene, i, j, terms, q, v, acc, par):
     Vx, Vy = xj1 * v[j] - xi1 * v[i], yj1 * v[j] - yi1 * v[i]
     Ax = xj2 * v[j] * v[j] + xj1 * acc[j] - xi2 * v[i] * v[i] - xi1 * acc[i]
     Ay = yj2 * v[j] * v[j] + yj1 * acc[j] - yi2 * v[i] * v[i] - yi1 * acc[i]
-    h = Dx * Dx + Dy * Dy - par(d * d)
+    with workprec():
+        d2 = d * d
+    h = Dx * Dx + Dy * Dy - par(d2)
     hi, hj = -2.0 * (Dx * xi1 + Dy * yi1), 2.0 * (Dx * xj1 + Dy * yj1)
     return h, hi, hj, 2.0 * (Dx * Vx + Dy * Vy), 2.0 * (Vx * Vx + Vy * Vy + Dx * Ax + Dy * Ay)
 
 
 def _link_gap(scene, i, j, terms, q, par) -> list:
     """[gap, dgap/dq_i, dgap/dq_j] of a contact (m): gap = |D| - r_i - r_j, gradient -n.C_i', n.C_j'."""
-    d = scene.bodies[i].radius + scene.bodies[j].radius
+    with workprec():  # at the model's precision, not mpmath's global one (quad runs need it)
+        d = scene.bodies[i].radius + scene.bodies[j].radius
     if d == 0:
         return [q[j] - q[i], hy.expression(-1.0), hy.expression(1.0)]
     Dx, Dy = terms[j].x_c - terms[i].x_c, terms[j].y_c - terms[i].y_c

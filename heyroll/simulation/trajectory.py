@@ -61,12 +61,16 @@ def sample_branches(result: SimulationResult, *, max_branches: int | None = None
     streamed = result.kept_collisions < result.n_collisions
     t_stop = float(result.times[-1]) if streamed and result.kept_collisions else float(result.t_final)
     breaks = [b for b in breaks if b[0] <= t_stop]
+    ends = [b[0] for b in breaks[1:]] + [t_stop]
     if max_branches is not None:
+        # Each branch ends at the next collision or mode change even when later ones are not
+        # drawn (measured before: the last branch ran without collisions to t_end, through the
+        # other ball).
         breaks = breaks[:max_branches]
     integrators: dict = {}
     branches = []
     for n, (t0, state, _) in enumerate(breaks):
-        t1 = breaks[n + 1][0] if n + 1 < len(breaks) else t_stop
+        t1 = ends[n]
         clusters = [c for (tc, _, c) in clusters_at if tc <= t0][-1]
         if clusters not in integrators:
             system = build_system(scene, DOUBLE, units=_units(scene, clusters), events=False)

@@ -297,7 +297,7 @@ class ArcChainTrack:
         lo, hi = (0, seg.length) if seg.kind == "line" else (seg.start, seg.end)
         if not lo <= a <= hi:
             raise SceneError(f"{field}.angle", f"must be within segment {segment}: [{float(lo):.17g}, {float(hi):.17g}]")
-        piece = self.pieces(body)[segment - 1]
+        piece = self.pieces(body, exact=True)[segment - 1]  # not the float pieces: quad runs start exactly
         with workprec():
             if seg.kind == "line":
                 return to_mpf(piece.s0) + a

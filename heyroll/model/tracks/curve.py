@@ -55,13 +55,21 @@ class CurveTrack:
         lo, hi = to_mpf(x_min), to_mpf(x_max)
         if not hi > lo:
             raise SceneError(f"{field}.x_max", f"must be > x_min, got x_min = {x_min}, x_max = {x_max}")
-        df = ex.derivative(f)
-        d2f = ex.derivative(df)
-        track = cls(text=y, f=f, df=df, d2f=d2f, d3f=ex.derivative(d2f), x_min=lo, x_max=hi)
+        try:
+            df = ex.derivative(f)
+            d2f = ex.derivative(df)
+            d3f = ex.derivative(d2f)
+        except (ZeroDivisionError, OverflowError, ValueError) as exc:  # constants folded while differentiating
+            raise SceneError(f"{field}.y", f"cannot be evaluated: {exc} (in {y!r})") from None
+        track = cls(text=y, f=f, df=df, d2f=d2f, d3f=d3f, x_min=lo, x_max=hi)
         xs = track.check_grid()
         with np.errstate(all="ignore"):
             for node, what in ((f, "y"), (df, "dy/dx"), (d2f, "d2y/dx2")):
-                values = track.numeric(node, xs)
+                try:
+                    values = track.numeric(node, xs)
+                except (ZeroDivisionError, OverflowError, ValueError) as exc:  # e.g. 1/0, 2**10000
+                    raise SceneError(f"{field}.y", f"{what} cannot be evaluated on [x_min, x_max]: {exc} "
+                                     f"(in {y!r})") from None
                 bad = ~np.isfinite(values)
                 if bad.any():
                     raise SceneError(f"{field}.y", f"{what} is not finite at x = {xs[bad][0]:.17g} "

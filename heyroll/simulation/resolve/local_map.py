@@ -21,6 +21,7 @@ stops the run.
 
 from __future__ import annotations
 
+from ...model._numbers import workprec
 from ..contact_function import CONTACT_VALUES, evaluate
 from .constraints import cluster_impact
 from ..events import (
@@ -30,8 +31,9 @@ from ..events import (
 
 def law_constants(scene, body, number):
     """(c_1, M_1, G_1) of a body in the run's type: c = c_1 sigma^p, M = M_1 sigma^p', G = G_1 sigma^2."""
-    v = scene.law.variables(body, 1)
-    return number(v.scale), number(v.inertia), number(body.kappa * body.mass)
+    with workprec():  # mpmath's global precision may be lower than the run's type
+        v = scene.law.variables(body, 1)
+        return number(v.scale), number(v.inertia), number(body.kappa * body.mass)
 
 
 def make_local_callback(scene, system, number, log, holder, time_scale, function, settle=None):
@@ -50,7 +52,8 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
     ci1, Mi1, Gi1 = law_constants(scene, scene.bodies[pair.i], num)
     cj1, Mj1, Gj1 = law_constants(scene, scene.bodies[pair.j], num)
     ps, pm = law.scale_power, law.inertia_power
-    one_k = num(1 + law.restitution)
+    with workprec():
+        one_k = num(1 + law.restitution)
     k = float(law.restitution)
     law_k = num(law.restitution)
     eps = system.precision.epsilon
