@@ -174,6 +174,61 @@ def section_precision_ladder(ctx: ReportContext) -> list[str]:
     return lines
 
 
+#: Collisions the independent path reference computes in a report (it is mpmath: ~1-5 s per collision).
+PATH_REFERENCE_COLLISIONS = 5
+PATH_REFERENCE_DPS = 40
+
+
+def section_path_reference(ctx: ReportContext) -> list[str]:
+    """Path tracks: the first collisions against heyroll.reference.path_collisions (mpmath, no engine code).
+
+    The reference reads the scene file itself (its own curve evaluation and arc
+    geometry), so it needs the file: scenes given in Python, and scene keys it
+    does not read, are reported as not checked rather than guessed.
+    """
+    import tomllib
+    from decimal import Decimal
+
+    from ..reference.path_collisions import run_path_reference, scene_inputs
+
+    title = ["## Against the independent reference (path tracks)", ""]
+    path = Path(ctx.source)
+    if not path.is_file():
+        return title + ["Not checked: the scene was not given as a file (the reference reads the file's tables).", ""]
+    try:
+        inputs = scene_inputs(tomllib.loads(path.read_text(), parse_float=Decimal))
+    except (ValueError, KeyError, TypeError) as exc:
+        return title + [f"Not checked: the reference cannot read this scene ({exc}).", ""]
+    n = min(ctx.collisions, PATH_REFERENCE_COLLISIONS)
+    try:
+        ref = _timed(ctx, "path reference", run_path_reference, n_collisions=n, dps=PATH_REFERENCE_DPS, **inputs)
+    except (ValueError, ArithmeticError, RuntimeError) as exc:
+        return title + [f"Not checked: the reference stopped ({exc}).", ""]
+    lines = title + [
+        f"The first {n} collisions from `heyroll.reference.path_collisions` at {PATH_REFERENCE_DPS} digits: each "
+        "body's own Lagrangian integrated by Bulirsch-Stoer extrapolation in mpmath, every gap, junction and limiter "
+        "located with steps that cannot jump a root (no code shared with the engine). *Digits* = -log10 of the "
+        "relative difference in t.",
+        "",
+        "| n | pair | t (reference) | digits double | digits long | digits quad |",
+        "|---|---|---|---|---|---|",
+    ]
+    runs = [ctx.double, ctx.long, ctx.quad]
+    m = min([len(ref.collisions)] + [r.n_collisions for r in runs])
+    worst = [math.inf] * 3
+    for k in range(m):
+        c = ref.collisions[k]
+        cells = []
+        for w, r in enumerate(runs):
+            d = digits_agreed(r.precision.format(r.times[k]), c.t)
+            worst[w] = min(worst[w], d)
+            cells.append(f"{d:.1f}")
+        lines.append(f"| {k + 1} | ({c.i},{c.j}) | {mpmath.nstr(c.t, 36)} | {' | '.join(cells)} |")
+    lines += ["", f"Reference status {ref.status}, {len(ref.collisions)} collisions. Worst digits agreed: double "
+              f"{worst[0]:.1f}, long {worst[1]:.1f}, quad {worst[2]:.1f}.", ""]
+    return lines
+
+
 def section_energy(ctx: ReportContext) -> list[str]:
     result = ctx.double
     table = result.collision_table()
@@ -352,4 +407,4 @@ ANALYSIS_SECTIONS: list = [section_series, section_paper_method, section_horizon
 
 
 #: Path tracks (arc chains, curves, turning planes): the precision ladder, energies, branches.
-PATH_SECTIONS: list = [section_precision_ladder, section_energy, section_portrait]
+PATH_SECTIONS: list = [section_precision_ladder, section_path_reference, section_energy, section_portrait]
