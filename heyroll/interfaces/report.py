@@ -199,7 +199,13 @@ def section_path_reference(ctx: ReportContext) -> list[str]:
         inputs = scene_inputs(tomllib.loads(path.read_text(), parse_float=Decimal))
     except (ValueError, KeyError, TypeError) as exc:
         return title + [f"Not checked: the reference cannot read this scene ({exc}).", ""]
-    n = min(ctx.collisions, PATH_REFERENCE_COLLISIONS)
+    n = min(ctx.collisions, PATH_REFERENCE_COLLISIONS, ctx.quad.n_collisions)
+    if n == 0:
+        return title + ["Not checked: the run has no collisions to compare (its junction and limiter times are "
+                        "compared across precisions above).", ""]
+    # The reference integrates in mpmath: only as far as the engine's n-th collision (and a little beyond).
+    t_n = float(ctx.quad.times[n - 1])
+    inputs["t_end"] = str(min(float(inputs.get("t_end") or t_n * 2), t_n * 1.05 + 1e-9))
     try:
         ref = _timed(ctx, "path reference", run_path_reference, n_collisions=n, dps=PATH_REFERENCE_DPS, **inputs)
     except (ValueError, ArithmeticError, RuntimeError) as exc:
