@@ -10,9 +10,12 @@ leaving heyoka.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import gc
 import math
+import signal
+import threading
 import time
 from dataclasses import dataclass
 from typing import Protocol
@@ -605,15 +608,18 @@ class _Stream:
             return
         chunk = records_to_arrays(log.records, self.n_bodies)
         rows = getattr(self.sink, "rows", None)
-        try:
-            self.sink.write(chunk, first_number=log.flushed + 1)
-        except BaseException:
-            # Ctrl-C inside the write: a chunk the sink took (its row count moved) must not be
-            # written again by the final flush (measured: a chunk twice), one it did not take must.
-            if rows is not None and self.sink.rows > rows:
-                self._taken(chunk)
-            raise
-        self._taken(chunk)
+        # Ctrl-C or SIGTERM during the write waits for its end (measured: a signal between the
+        # sink's write and its row count left a chunk in the file twice).
+        with _signals_deferred():
+            try:
+                self.sink.write(chunk, first_number=log.flushed + 1)
+            except BaseException:
+                # An interruption raised by the sink itself: a chunk it took (its row count moved)
+                # must not be written again by the final flush, one it did not take must.
+                if rows is not None and self.sink.rows > rows:
+                    self._taken(chunk)
+                raise
+            self._taken(chunk)
 
     def _taken(self, chunk) -> None:
         log = self.log
@@ -630,6 +636,30 @@ class _Stream:
         if self.progress is not None and time.perf_counter() - self.last_report > 0.2:
             self.last_report = time.perf_counter()
             self.progress(float(self.ta.time), self.log.count)
+
+
+@contextlib.contextmanager
+def _signals_deferred():
+    """SIGINT and SIGTERM wait until the block ends, then go to their handlers (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list = []
+    saved = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        saved[sig] = signal.getsignal(sig)
+        signal.signal(sig, lambda signum, frame: pending.append((signum, frame)))
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+        for signum, frame in pending[:1]:
+            handler = saved[signum]
+            if callable(handler):
+                handler(signum, frame)
+            elif handler == signal.SIG_DFL:
+                signal.raise_signal(signum)  # the default action (terminate), now that the write is whole
 
 
 def _status(log, outcome, t_end) -> tuple[Status, str]:
