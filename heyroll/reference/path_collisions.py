@@ -95,6 +95,7 @@ from dataclasses import dataclass, field
 
 import mpmath
 
+from .collisions import ReferenceCollision
 from .equilibria import FUNCTIONS, _chain, _check_keys, _num, _real, _segments, compile_expression
 
 DIGITS = 40
@@ -301,25 +302,16 @@ JET_FUNCTIONS = {name: _jet_function(name) for name in FUNCTIONS}
 # ------------------------------------------------------------------- records
 
 @dataclass(frozen=True)
-class PathCollision:
+class PathCollision(ReferenceCollision):
     """One collision: time, bodies (numbered from 1, i before j along the track), positions and rates.
 
-    The first nine fields are those of :class:`heyroll.reference.collisions.ReferenceCollision`
-    (so :func:`heyroll.reference.collisions.reference_table` takes a list of these);
-    ``law_flag`` is 0 for the law, 1 for the fallback (see the module doc);
+    The fields of :class:`heyroll.reference.collisions.ReferenceCollision` (so
+    :func:`heyroll.reference.collisions.reference_table` takes a list of these), and
+    ``law_flag`` 0 for the law, 1 for the fallback (see the module doc);
     ``energy_before``/``energy_after`` the total of the bodies' first integrals
     sum m (1/2 kappa F q'^2 - 1/2 Omega^2 (x_C - a)^2 + g y_C), J.
     """
 
-    t: mpmath.mpf
-    i: int
-    j: int
-    q_i: mpmath.mpf
-    q_j: mpmath.mpf
-    dq_i_before: mpmath.mpf
-    dq_j_before: mpmath.mpf
-    dq_i_after: mpmath.mpf
-    dq_j_after: mpmath.mpf
     law_flag: int = 0
     energy_before: mpmath.mpf = mpmath.mpf(0)
     energy_after: mpmath.mpf = mpmath.mpf(0)
