@@ -62,9 +62,10 @@ from heyroll.model.laws import conserves_mechanical_energy_bound
 from heyroll.simulation.trajectory import sample_branches
 
 #: Examples per property in the default run (tests/test_fuzz.py takes ~30 s on 2 cores).
-EXAMPLES = {"scenes": 300, "loader": 1500, "text": 400, "cli": 50}
+EXAMPLES = {"scenes": 300, "loader": 1500, "text": 400, "cli": 50, "path_loader": 400, "path_cli": 30}
 #: ... and in the slow run (test_fuzz_volume).
-SLOW_EXAMPLES = {"scenes": 2000, "scenes_extended": 100, "loader": 20000, "text": 5000, "cli": 400}
+SLOW_EXAMPLES = {"scenes": 2000, "scenes_extended": 100, "loader": 20000, "text": 5000, "cli": 400,
+                 "path_loader": 5000, "path_cli": 300}
 
 FUZZ = dict(
     deadline=None, derandomize=True, database=None,
@@ -251,9 +252,51 @@ EXTREME = ["1e400", "-1e400", "1e-400", "-1e-400", "1e99999"]
 GARBAGE = ["=", "[", "]", "[[", '"', "\n", "#", "= =", "[track", "\x00", "\ufeff", "é", "\r", "{", ".", "\t"]
 
 
+#: The same, on each path track type (issue 13: the loader and the CLI fuzzed on every track).
+PATH_BASES = {
+    "arcs": [
+        (None, "name", '"fuzz-arcs"'),
+        ("[track]", "type", '"arcs"'), ("[track]", "start_x", "-2.0"), ("[track]", "start_y", "1.0"),
+        ("[track]", "limiter_restitution", "0.8"),
+        ("[[track.segments]]", "kind", '"line"'), ("[[track.segments]]", "angle", "-0.5"),
+        ("[[track.segments]]", "length", "1.0"),
+        ("[[track.segments]]#2", "kind", '"arc"'), ("[[track.segments]]#2", "radius", "1.0"),
+        ("[[track.segments]]#2", "side", '"concave"'), ("[[track.segments]]#2", "start", "-0.5"),
+        ("[[track.segments]]#2", "end", "1.2"),
+        ("[[bodies]]", "shape", '"solid_sphere"'), ("[[bodies]]", "radius", "0.1"), ("[[bodies]]", "mass", "1.0"),
+        ("[[bodies]]", "s", "0.2"), ("[[bodies]]", "ds", "0.0"),
+        ("[[bodies]]#2", "shape", '"disk"'), ("[[bodies]]#2", "radius", "0.08"), ("[[bodies]]#2", "mass", "2.0"),
+        ("[[bodies]]#2", "segment", "2"), ("[[bodies]]#2", "angle", "0.3"),
+        ("[collision]", "restitution", "0.7"), ("[run]", "t_end", "1.0"),
+    ],
+    "three_arcs": [
+        ("[track]", "type", '"three_arcs"'), ("[track]", "radius", "1.0"), ("[track]", "hump_radius", "0.5"),
+        ("[track]", "beta", "0.2"),
+        ("[[bodies]]", "shape", '"disk"'), ("[[bodies]]", "radius", "0.05"), ("[[bodies]]", "mass", "1.0"),
+        ("[[bodies]]", "segment", "1"), ("[[bodies]]", "angle", "-0.5"),
+        ("[[bodies]]#2", "shape", '"ring"'), ("[[bodies]]#2", "radius", "0.08"), ("[[bodies]]#2", "mass", "2.0"),
+        ("[[bodies]]#2", "segment", "1"), ("[[bodies]]#2", "angle", "0.5"),
+        ("[run]", "t_end", "1.0"),
+    ],
+    "curve": [
+        ("[track]", "type", '"curve"'), ("[track]", "y", '"0.5*x**2*(x**2 - 1)**2"'),
+        ("[track]", "x_min", "-1.6"), ("[track]", "x_max", "1.6"), ("[track]", "sides", '"two"'),
+        ("[frame]", "omega", "3.0"), ("[frame]", "axis_x", "0.0"),
+        ("[[bodies]]", "shape", '"disk"'), ("[[bodies]]", "radius", "0.05"), ("[[bodies]]", "mass", "1.0"),
+        ("[[bodies]]", "x", "0.3"), ("[[bodies]]", "dx", "0.0"),
+        ("[[bodies]]#2", "shape", '"disk"'), ("[[bodies]]#2", "radius", "0.05"), ("[[bodies]]#2", "mass", "1.5"),
+        ("[[bodies]]#2", "x", "1.1"),
+        ("[collision]", "law", '"newton"'), ("[run]", "t_end", "1.0"),
+    ],
+}
+#: Curve expressions a hostile file may hold (each must load or be one line naming track.y).
+EXPRESSIONS = ['"1/0"', '"2**10000*x**2"', '"x/(x-x)"', '"sqrt(-1-x**2)"', '"exp(1000*x)"', '"1"', '"0.1*x"',
+               '"((((x))))"', '"x**0.5"', '"sin(x)**-1"', '"' + "+".join(["x"] * 600) + '"', '"x**x"', '"1e400*x"']
+
+
 @st.composite
-def malformed_scene_text(draw, values=tuple(VALUES + EXTREME), mutations=4, garble=True):
-    lines = list(BASE)
+def malformed_scene_text(draw, values=tuple(VALUES + EXTREME), mutations=4, garble=True, base=None):
+    lines = list(BASE if base is None else base)
     for _ in range(draw(st.integers(1, mutations))):
         kind = draw(st.sampled_from(("value", "value", "value", "delete", "add", "rename", "float", "int")))
         n = draw(st.integers(0, len(lines) - 1))
@@ -391,6 +434,49 @@ def test_cli_on_malformed_scene_files(text):
     check_cli(text)
 
 
+@st.composite
+def malformed_path_scene_text(draw, mutations=3, garble=True):
+    kind = draw(st.sampled_from(sorted(PATH_BASES)))
+    values = tuple(VALUES + EXTREME + (EXPRESSIONS if kind == "curve" else []))
+    return draw(malformed_scene_text(values=values, mutations=mutations, garble=garble, base=PATH_BASES[kind]))
+
+
+def test_path_bases_are_valid():
+    for kind, lines in PATH_BASES.items():
+        assert isinstance(parse_scene(_render(lines)), Scene), kind
+
+
+@settings(max_examples=EXAMPLES["path_loader"], **FUZZ)
+@given(malformed_path_scene_text())
+def test_loader_on_every_path_track_type(text):
+    check_loader(text)
+
+
+def check_cli_path(text: str) -> None:
+    """As check_cli, on a path scene: a short run, every event kind bounded."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "scene.toml")
+        with open(path, "w", encoding="utf-8", newline="") as f:
+            f.write(text)
+        code, stderr = _cli(path, os.path.join(tmp, "out"), "--t-end", "0.3", "--max-events", "2000")
+        event(f"exit {code}")
+        assert code in (0, 1, 2), (code, stderr)
+        assert "Traceback" not in stderr
+        if isinstance(_load(text, record=False), SceneError):
+            assert code == 2
+        if code == 2:
+            assert stderr.startswith("heyroll: error: ") and stderr.count("\n") == 1, stderr
+            assert sorted(os.listdir(tmp)) == ["scene.toml"]  # nothing written
+        else:
+            assert os.path.isfile(os.path.join(tmp, "out", "summary.json"))
+
+
+@settings(max_examples=EXAMPLES["path_cli"], **FUZZ)
+@given(malformed_path_scene_text(mutations=1, garble=False))
+def test_cli_on_malformed_path_scene_files(text):
+    check_cli_path(text)
+
+
 HANDFUL = {
     "nan mass": [("[[bodies]]", "mass", "nan")],
     "negative radius": [("[[bodies]]", "radius", "-0.1")],
@@ -436,6 +522,8 @@ PROPERTIES = {
     "loader": (check_loader, malformed_scene_text()),
     "text": (check_loader, st.text(max_size=400)),
     "cli": (check_cli, malformed_scene_text(mutations=1, garble=False)),
+    "path_loader": (check_loader, malformed_path_scene_text()),
+    "path_cli": (check_cli_path, malformed_path_scene_text(mutations=1, garble=False)),
 }
 
 
