@@ -150,3 +150,16 @@ def test_hostile_scenes_are_one_line_exit_2_and_nothing_written(text, field, tmp
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"heyroll: error: {field}:"), err
     assert not out.exists()
+
+
+def test_a_segment_kind_that_is_not_a_string_is_one_line(tmp_path, capsys):
+    # found by the path-track CLI fuzz: kind = [1, 2] ended in "TypeError: unhashable type: 'list'"
+    from heyroll.interfaces.cli import main
+
+    text = ('[track]\ntype = "arcs"\n[[track.segments]]\nkind = [1, 2]\nangle = -0.5\nlength = 1.0\n'
+            '[[bodies]]\nshape = "disk"\nradius = 0.05\nmass = 1.0\ns = 0.2\n')
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["heyroll: error: track.segments[1].kind: must be arc or line, got [1, 2]"]

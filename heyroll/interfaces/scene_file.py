@@ -123,7 +123,7 @@ def _path_track(table: dict):
     for n, entry in enumerate(segments_data, start=1):
         where = f"track.segments[{n}]"
         seg_kind = entry.get("kind")
-        if seg_kind not in SEGMENT_KEYS:
+        if not isinstance(seg_kind, str) or seg_kind not in SEGMENT_KEYS:  # (a list is unhashable: found by fuzz)
             raise SceneError(f"{where}.kind", f"must be arc or line, got {seg_kind!r}")
         _no_unknown(entry, SEGMENT_KEYS[seg_kind], where)
         if seg_kind == "line":
