@@ -186,8 +186,9 @@ class Scene:
                     if not math.isfinite(float(value)):
                         raise SceneError("track.radius", f"the {name} of body {n + 1} ({mpmath.nstr(value, 6)}) is "
                                          "not a finite double: the radius, the masses or g are out of range")
-            total = float(self.body_energy(n))
-            at_rest = float(self.body_energy(n, dphi=0))
+            with np.errstate(all="ignore"):  # an overflow is what is checked here, not a warning
+                total = float(self.body_energy(n))
+                at_rest = float(self.body_energy(n, dphi=0))
             if not math.isfinite(at_rest):
                 where = "track.radius" if self.track.linear_gap else "track"
                 raise SceneError(where, f"the potential energy of body {n + 1} ({at_rest}) is not a finite double: "
