@@ -549,3 +549,19 @@ def test_a_flat_track_has_one_neutral_stretch_not_a_saddle_per_grid_node(tmp_pat
     turning = EquilibriumProblem(CurveTrack.make("0.1", "-1", "1"), DISK, Frame.make("2", "0.2"))
     eq = find_equilibria(turning)
     assert [e.type for e in eq] == ["saddle"] and abs(eq[0].x - 0.2) < 1e-15
+
+
+@pytest.mark.parametrize("y", ["1", "0", "0.1*x", "-0.3*x + 2"])
+def test_flat_and_straight_curves_run_against_closed_forms(y):
+    # Issue 13: flat or straight curves ended in a heyoka ValueError ("extra functions in a Taylor
+    # decomposition cannot be constants"). On a straight line the contact abscissa obeys
+    # x'' = -g sin(a) cos(a) / kappa (slope tan a), between elastic limiter impacts.
+    track = CurveTrack.make(y, "-1.5", "1.5")
+    ball = Body.of_shape("solid_sphere", "0.08", mass=1)
+    result = simulate(Scene.make(track, [ball], ["-1.0"], ["1.0"], run=RunSettings.make("0.4")))
+    assert result.status.value == "completed", result.message
+    slope = float(track.numeric(track.df, [0.0])[0])
+    a = -9.81 * slope / (1 + slope * slope) / 1.4
+    t = 0.4
+    assert float(result.final_state[0]) == pytest.approx(-1.0 + t + a * t * t / 2, abs=1e-13)
+    assert float(result.final_state[1]) == pytest.approx(1.0 + a * t, abs=1e-13)
