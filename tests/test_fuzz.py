@@ -413,11 +413,17 @@ def _bounded_t_end(text: str) -> str:
 
 
 def check_cli(text: str) -> None:
+    _check_cli_run(text, "--t-end", _bounded_t_end(text), "--max-collisions", "20")
+
+
+def _check_cli_run(text: str, *options: str) -> None:
+    """Run the CLI on ``text``: exit 0, 1 or 2, never a traceback; 2 (one line, nothing written)
+    whenever the loader rejects the file; otherwise a summary on disk."""
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "scene.toml")
         with open(path, "w", encoding="utf-8", newline="") as f:
             f.write(text)
-        code, stderr = _cli(path, os.path.join(tmp, "out"), "--t-end", _bounded_t_end(text), "--max-collisions", "20")
+        code, stderr = _cli(path, os.path.join(tmp, "out"), *options)
         event(f"exit {code}")
         assert code in (0, 1, 2), (code, stderr)
         assert "Traceback" not in stderr
@@ -426,6 +432,8 @@ def check_cli(text: str) -> None:
         if code == 2:
             assert stderr.startswith("heyroll: error: ") and stderr.count("\n") == 1, stderr
             assert sorted(os.listdir(tmp)) == ["scene.toml"]  # nothing written
+        else:
+            assert os.path.isfile(os.path.join(tmp, "out", "summary.json"))
 
 
 @settings(max_examples=EXAMPLES["cli"], **FUZZ)
@@ -454,21 +462,7 @@ def test_loader_on_every_path_track_type(text):
 
 def check_cli_path(text: str) -> None:
     """As check_cli, on a path scene: a short run, every event kind bounded."""
-    with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, "scene.toml")
-        with open(path, "w", encoding="utf-8", newline="") as f:
-            f.write(text)
-        code, stderr = _cli(path, os.path.join(tmp, "out"), "--t-end", "0.3", "--max-events", "2000")
-        event(f"exit {code}")
-        assert code in (0, 1, 2), (code, stderr)
-        assert "Traceback" not in stderr
-        if isinstance(_load(text, record=False), SceneError):
-            assert code == 2
-        if code == 2:
-            assert stderr.startswith("heyroll: error: ") and stderr.count("\n") == 1, stderr
-            assert sorted(os.listdir(tmp)) == ["scene.toml"]  # nothing written
-        else:
-            assert os.path.isfile(os.path.join(tmp, "out", "summary.json"))
+    _check_cli_run(text, "--t-end", "0.3", "--max-events", "2000")
 
 
 @settings(max_examples=EXAMPLES["path_cli"], **FUZZ)
