@@ -935,3 +935,20 @@ def test_a_row_of_touching_bodies_opens_every_gap_at_the_start():
     # Newton's law on centre speeds with unequal kappa can create energy (by design):
     # only the collisions that cannot are checked.
     _energy_never_created(result)
+
+
+@pytest.mark.parametrize("n, precision", [(4, "double"), (8, "double"), (4, "quad")])
+def test_disjoint_pairs_colliding_at_one_instant_are_all_resolved(n, precision):
+    # Issue 12: bodies started mirror-symmetrically at rest make two disjoint pairs collide at the
+    # same instant; the settler looked only at the neighbours of the pair whose event fired, the
+    # other pair restarted at a gap of exactly 0, heyoka could not see it close: status overlap
+    # after 2 collisions (4 balls) or 55 (8 balls). Elastic: the energy is kept.
+    b = heyroll.Body.of_shape("solid_sphere", "0.1", mass="1")
+    phis = [str(round(-0.2 * (n - 1) + 0.4 * k, 10)) for k in range(n)]
+    sc = heyroll.Scene.make(heyroll.CircleTrack.of_radius(5), [b] * n, phi=phis, dphi=[0] * n,
+                            law=heyroll.make_law("hedrih", "1"), run=heyroll.RunSettings.make(10 if precision == "double" else 3))
+    result = heyroll.simulate(sc, precision=precision)
+    assert result.status is Status.COMPLETED, result.message
+    table = result.collision_table()
+    assert np.any(np.diff(table["t"]) == 0)  # simultaneous collisions happened and were resolved
+    assert abs(result.energy_final - result.energy_initial) <= 1e-12 * abs(result.energy_initial)

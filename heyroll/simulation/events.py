@@ -659,10 +659,30 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                 return moved
         return moved
 
+    # Every contact's two units and gap constant as arrays: one numpy pass finds the pairs that
+    # touch anywhere (two disjoint pairs of a symmetric scene collide at one instant; the other
+    # pair's event cannot fire from a gap of exactly 0 at the restart: measured, status overlap).
+    where_a = np.array([g[0] for g in geometry], dtype=np.int64)
+    where_b = np.array([g[1] for g in geometry], dtype=np.int64)
+    constants = [g[2] for g in geometry]
+    typed: dict = {}
+
+    def touching_elsewhere(s) -> list:
+        c = typed.get(s.dtype)
+        if c is None:
+            c = typed[s.dtype] = np.array(constants, dtype=s.dtype)
+        pa, pb = s[where_a], s[where_b]
+        gap = (pb - pa + c).astype(float)  # computed in the run's type; compared as doubles (~1e-32 is fine)
+        scale = 1 + np.abs(pa.astype(float)) + np.abs(pb.astype(float))
+        near = np.abs(gap) <= RESOLUTION_ULPS * eps * scale
+        return [int(u) for n in np.flatnonzero(near) for u in (where_a[n], where_b[n])]
+
     def settle(s, t, units, skip_open=None, skip_merge=()) -> bool:
         # Impulses first (positions frozen: every collision of the instant sees
         # the same positions), then open the pairs left touching.
         pending = list(units)
+        if len(geometry) > 2 and len(units) <= 2:  # after a collision (the mode's start looks at every unit)
+            pending += [u for u in touching_elsewhere(s) if u not in units]
         seen = set(pending)
         rounds = 0
         while pending:
