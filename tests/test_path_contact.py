@@ -118,3 +118,16 @@ def test_persistent_contact_on_a_curve_in_every_precision():
     for p, tol in (("double", 1e-12), ("long", 1e-15)):
         diff = max(abs(mpmath.mpf(str(x)) - y) for x, y in zip(runs[p].final_state, quad))
         assert diff < tol, (p, diff)
+
+
+def test_disjoint_pairs_colliding_at_one_instant_on_a_curve_are_all_resolved():
+    # As on the circle (tests/test_hard_cases.py): four disks at rest, mirror-symmetric in a shallow
+    # bowl, collide in two disjoint pairs at one instant; the second pair was missed (status overlap).
+    disk = Body.of_shape("disk", "0.05", mass="1")
+    track = CurveTrack.make("0.05*x**2", "-3", "3")
+    scene = Scene.make(track, [disk] * 4, ["-1.2", "-0.4", "0.4", "1.2"], [0] * 4,
+                       law=heyroll.make_law("hedrih", "1"), run=RunSettings.make(10))
+    result = simulate(scene)
+    assert result.status.value == "completed", result.message
+    assert np.any(np.diff(result.collision_table()["t"]) == 0)
+    assert abs(result.energy_final - result.energy_initial) <= 1e-12 * abs(result.energy_initial)

@@ -290,9 +290,11 @@ def _overlap_stopper(log, number, holder, system):
         full = system.expand(holder[0].tolist())
         i, j = contact.pair.i, contact.pair.j
         log.stop.reason = "overlap"
+        # The circle's gap is an angle; elsewhere a distance (the guard's bound, see system.py).
+        unit = "rad" if system.linear_gap else "m"
         log.stop.message = (
             f"bodies {i + 1} and {j + 1} overlap at t = {float(ta.time):.17g} s (gap below "
-            f"-{overlap_tolerance(full[j]):.3g} rad): a collision was missed; stopped"
+            f"about -{overlap_tolerance(full[j]):.3g} {unit}): a collision was missed; stopped"
         )
         return False
 

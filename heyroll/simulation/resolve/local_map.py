@@ -200,10 +200,24 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
         base = CONTACT_VALUES * number
         return evaluate(function, s, holder[1])[base:base + CONTACT_VALUES].tolist()
 
+    def touching_elsewhere(s) -> list:
+        """Every pair whose gap is within resolution (one evaluation for all): disjoint pairs of a
+        symmetric scene collide at one instant, and the other pair's event cannot fire from 0."""
+        values = evaluate(function, s, holder[1]).tolist()
+        out = []
+        for number, (a, b) in enumerate(where):
+            gap = float(values[CONTACT_VALUES * number])
+            if abs(gap) <= RESOLUTION_ULPS * eps * (1 + abs(float(s[a])) + abs(float(s[b]))):
+                out += [a, b]
+        return out
+
     def settle(s, t, units, skip_open=None, skip_merge=()) -> bool:
         if function is None:
             return True
-        pending, seen, rounds = list(units), set(units), 0
+        pending = list(units)
+        if len(where) > 2 and len(pending) <= 2:  # after a collision (the mode's start looks at every body)
+            pending += [u for u in touching_elsewhere(s) if u not in units]
+        seen, rounds = set(pending), 0
         while pending:
             unit = pending.pop()
             for number in by_unit.get(unit, ()):
