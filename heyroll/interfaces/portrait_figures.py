@@ -258,35 +258,70 @@ def bifurcation_figure(scene: Scene, path, omegas, *, body: int = 0) -> list:
 
 
 def branches_figure(result: SimulationResult, path, *, max_points: int = 4000) -> None:
-    """Each body's phase trajectory (a dense run), a colour per branch between collisions, dotted jumps."""
+    """Each body's phase trajectory from a dense run, as the circle's Fig. 11: the body's own level
+    curves of its first integral behind, one colour per branch on a scale of collision number,
+    jumps at collisions (dots incoming, squares outgoing), junctions dashed, limiter impacts x."""
+    from matplotlib import cm, colors
+
     scene = result.scene
     t, X = result.sample(max_points)
     table = result.collision_table()
     times = np.asarray(table["t"], dtype=float)
     n = len(scene.bodies)
-    fig = Figure(figsize=(9, 3.2 * n))
+    xlabel, ylabel = _coordinate_label(scene)
+    fig = Figure(figsize=(9, 3.4 * n), layout="constrained")
+    norm = colors.Normalize(0, max(len(times), 1))
+    cmap = cm.viridis
+    passages = result.passages
     for b in range(n):
         ax = fig.add_subplot(n, 1, b + 1)
         q, v = X[:, b], X[:, n + b]
+        span = max(float(np.ptp(q)), 1e-9)
+        vmax = 1.15 * max(float(np.max(np.abs(v))), 1e-9)
+        qg = np.linspace(float(q.min()) - 0.05 * span, float(q.max()) + 0.05 * span, 220)
+        vg = np.linspace(-vmax, vmax, 160)
+        with np.errstate(all="ignore"):
+            H = first_integral_grid(scene, b, qg, vg)
+        if np.all(np.isfinite(H)) and np.ptp(H) > 0:
+            ax.contour(qg, vg, H, levels=24, colors="0.82", linewidths=0.5, negative_linestyles="solid")
         seg = np.searchsorted(times, t, side="right")
         for k in np.unique(seg):
             sel = seg == k
-            ax.plot(q[sel], v[sel], lw=0.8, color=f"C{k % 10}")
+            ax.plot(q[sel], v[sel], lw=1.0, color=cmap(norm(k)))
         for row in table:
             if b + 1 in (row["i"], row["j"]):
                 side = "i" if row["i"] == b + 1 else "j"
-                ax.plot([row[f"q_{side}"]] * 2, [row[f"dq_{side}_before"], row[f"dq_{side}_after"]], "k:", lw=0.8)
-        ax.set_ylabel(f"body {b + 1}: d{scene.coordinate}/dt")
-    ax.set_xlabel(scene.coordinate)
-    fig.suptitle(f"{scene.name}: phase trajectory branches (colour changes at each collision; dotted: jumps)",
-                 fontsize=9)
+                qc, v0, v1 = row[f"q_{side}"], row[f"dq_{side}_before"], row[f"dq_{side}_after"]
+                ax.plot([qc, qc], [v0, v1], "k--", lw=0.6)
+                ax.plot(qc, v0, "o", color="k", ms=3)
+                ax.plot(qc, v1, "s", mfc="white", mec="k", ms=3.5)
+        for s_j in _junctions(scene, b):
+            if qg[0] <= s_j <= qg[-1]:  # only the junctions this body's branches reach
+                ax.axvline(s_j, color="0.5", lw=0.7, ls=":")
+        ax.set_xlim(qg[0], qg[-1])
+        hits = [(float(p[5]), float(p[6]), float(p[7])) for p in passages if int(p[1]) == b and int(p[2]) != 0
+                and float(p[0]) <= float(t[-1])]
+        for qc, v0, v1 in hits:
+            ax.plot([qc, qc], [v0, v1], color="tab:red", lw=0.6, ls="--")
+            ax.plot(qc, v0, "x", color="tab:red", ms=5)
+        ax.set_ylim(-vmax, vmax)
+        ax.ticklabel_format(useOffset=False)
+        ax.set_ylabel(f"body {b + 1}: {ylabel}")
+        ax.set_title(f"body {b + 1}: {scene.bodies[b].describe()}", fontsize=9)
+    ax.set_xlabel(xlabel)
+    fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), ax=fig.axes, label="branch (collisions before it)",
+                 shrink=0.8)
+    shown = int(np.sum(times <= t[-1]))
+    fig.suptitle(f"{scene.name}: phase trajectory branches, {shown} collisions\n(grey: the body's own level "
+                 "curves; dots incoming, squares outgoing; red x: limiter impacts; dotted: junctions)", fontsize=9)
     _save(fig, path)
 
 
 def body_energy_figure(result: SimulationResult, path, *, max_points: int = 4000) -> None:
+    """Each body's first integral (its mechanical energy in a fixed plane) and their sum along the run."""
     scene = result.scene
     t, X = result.sample(max_points)
-    fig = Figure(figsize=(9, 4))
+    fig = Figure(figsize=(9, 4.2), layout="constrained")
     ax = fig.add_subplot()
     total = 0
     n = len(scene.bodies)
@@ -294,9 +329,14 @@ def body_energy_figure(result: SimulationResult, path, *, max_points: int = 4000
         H = body_energy(scene, b, X[:, b], X[:, n + b])
         total = total + H
         ax.plot(t, H, lw=0.9, label=f"body {b + 1}")
-    ax.plot(t, total, "k", lw=1.2, label="sum")
+    if n > 1:
+        ax.plot(t, total, "k", lw=1.2, label="sum")
     ax.set_xlabel("t [s]")
-    ax.set_ylabel("first integral H_i [J]")
-    ax.legend(fontsize=8)
-    ax.set_title(f"{scene.name}: energy transfer between the bodies at collisions", fontsize=9)
+    name = "Jacobi integral" if scene.frame.rotating else "mechanical energy"
+    ax.set_ylabel(f"{name} H [J]")
+    ax.ticklabel_format(useOffset=False)
+    fig.legend(loc="outside lower center", ncols=n + 1, fontsize=8, frameon=False)
+    what = ("energy exchanged between the bodies at collisions" if n > 1
+            else "constant between limiter impacts, which change it by their restitution")
+    ax.set_title(f"{scene.name}: each body's {name} ({what})", fontsize=9)
     _save(fig, path)
