@@ -583,7 +583,8 @@ def _constrained_accelerations(scene, units, terms, q, v, par, events):
             h, hi, hj, h_rate, h_free = _link_constraint(scene, i, j, terms, q, v, acc, par)
             grads.append((hi, hj))
             rhs.append(-(h_free + 2 * alpha * h_rate + alpha * alpha * h))
-            link_terms.append(_link_gap(scene, i, j, terms, q, par))
+            gap = _gap(scene, i, j, terms[i], terms[j], q[i], q[j], par)  # the watched gap's own form
+            link_terms.append([gap, hy.diff(gap, q[i]), hy.diff(gap, q[j])])
             links.append(ContactLink(unit=u, position=len(grads) - 1, pair_index=scene_pair_index(scene, i, j)))
         L = len(grads)
         diag = [grads[l][0] * grads[l][0] / M[l] + grads[l][1] * grads[l][1] / M[l + 1] for l in range(L)]
@@ -640,19 +641,6 @@ def _link_constraint(scene, i, j, terms, q, v, acc, par):
     h = Dx * Dx + Dy * Dy - par(d2)
     hi, hj = -2.0 * (Dx * xi1 + Dy * yi1), 2.0 * (Dx * xj1 + Dy * yj1)
     return h, hi, hj, 2.0 * (Dx * Vx + Dy * Vy), 2.0 * (Vx * Vx + Vy * Vy + Dx * Ax + Dy * Ay)
-
-
-def _link_gap(scene, i, j, terms, q, par) -> list:
-    """[gap, dgap/dq_i, dgap/dq_j] of a contact (m): gap = |D| - r_i - r_j, gradient -n.C_i', n.C_j'."""
-    with workprec():  # at the model's precision, not mpmath's global one (quad runs need it)
-        d = scene.bodies[i].radius + scene.bodies[j].radius
-    if d == 0:
-        return [q[j] - q[i], hy.expression(-1.0), hy.expression(1.0)]
-    Dx, Dy = terms[j].x_c - terms[i].x_c, terms[j].y_c - terms[i].y_c
-    dist = hy.sqrt(Dx * Dx + Dy * Dy)
-    (xi1, yi1), _ = _centre_derivatives(terms[i], q[i])
-    (xj1, yj1), _ = _centre_derivatives(terms[j], q[j])
-    return [dist - par(d), -(Dx * xi1 + Dy * yi1) / dist, (Dx * xj1 + Dy * yj1) / dist]
 
 
 def _vars(prefix: str, n: int) -> list:
