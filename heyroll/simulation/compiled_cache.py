@@ -16,6 +16,9 @@ class CompiledCache:
         self.size = size
         self._entries: OrderedDict = OrderedDict()
 
+    def __contains__(self, key) -> bool:
+        return key in self._entries
+
     def get(self, key, build):
         entry = self._entries.get(key)
         if entry is None:

@@ -238,10 +238,14 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
     same_instant = 0  # mode changes in a row at one instant (bounded: see MAX_CHANGES_AT_ONE_INSTANT)
     while limit != 0 and not start_limit:
         system = first_system if first else build_system(scene, precision, pairs=pairs, units=units)
-        first = False
+        later_mode, first = not first, False
         holder: list = [None, None]
         handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale, pieces)
-        ta, slots, nt_slots = _integrator(system, options, precision.number(precision.epsilon * time_scale))
+        cooldown = precision.number(precision.epsilon * time_scale)
+        # The first mode is compiled optimized; a later one (a cluster forming or splitting,
+        # a body coming to rest), unless compiled before, quickly first (see QUICK_STEPS).
+        quick = later_mode and not _compiled(system, options, cooldown)
+        ta, slots, nt_slots = _integrator(system, options, cooldown, quick=quick)
         slots[:], nt_slots[:] = handlers, warnings
         params = parameters_on_pieces(scene, system, pieces) if system.piece_blocks else list(system.parameters)
         ta.pars[:] = params[: len(ta.pars)]  # heyoka keeps those up to the last one used
@@ -268,8 +272,11 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
             if overlap:
                 log.stop.reason, log.stop.message = "overlap", overlap
             else:
-                outcome, n_steps = _propagate(ta, log, precision.number(t_end), dense,
-                                              None if system.per_body or system.n_units == len(scene.bodies) else system.expand)
+                optimized = _optimized_successor(system, options, cooldown, handlers, warnings, holder, stream) \
+                    if quick else None
+                outcome, n_steps, ta = _propagate(
+                    ta, log, precision.number(t_end), dense,
+                    None if system.per_body or system.n_units == len(scene.bodies) else system.expand, optimized)
                 steps += n_steps
         full_state = system.expand(ta.state.tolist())
         t = ta.dtime
@@ -384,12 +391,14 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
 STEP_CHUNK = 1 << 16
 
 
-def _propagate(ta, log, t_end, dense=None, expand=None):
-    """propagate_until with the cyclic GC off and Ctrl-C turned into a clean stop.
+def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None):
+    """propagate_until with the cyclic GC off and Ctrl-C turned into a clean stop: (outcome, steps, ta).
 
     In chunks of STEP_CHUNK steps: a chunk that leaves the time where it was
     means heyoka is stuck (measured: g = 1e29 with a track-force event makes
     it take zero-length steps for ever); the run then stops, status failed.
+    ``optimized(ta)``: for a quickly compiled integrator, the optimized one
+    that takes over, in the same state, after QUICK_STEPS steps.
     """
     # The log grows by one small list per collision: the cyclic garbage
     # collector would rescan it again and again, for nothing (no cycles).
@@ -400,27 +409,31 @@ def _propagate(ta, log, t_end, dense=None, expand=None):
         while True:
             before = ta.dtime
             t0 = ta.time
+            chunk = STEP_CHUNK if optimized is None else QUICK_STEPS
             if dense is None:
-                result = ta.propagate_until(t_end, max_steps=STEP_CHUNK)
+                result = ta.propagate_until(t_end, max_steps=chunk)
             else:
-                result = ta.propagate_until(t_end, max_steps=STEP_CHUNK, c_output=True)
+                result = ta.propagate_until(t_end, max_steps=chunk, c_output=True)
                 if result[4] is not None:
                     dense.append((float(t0), float(ta.time), result[4], expand))
             steps += int(result[3])
             if result[0] != hy.taylor_outcome.step_limit:
-                return result[0], steps
+                return result[0], steps, ta
+            if optimized is not None:
+                ta, optimized = optimized(ta), None
+                continue
             if ta.dtime == before:
                 log.stop.reason = "failed"
                 log.stop.message = (
                     f"the integrator does not advance from t = {float(ta.time):.17g} s ({STEP_CHUNK} steps of "
                     "zero length): stopped"
                 )
-                return result[0], steps
+                return result[0], steps, ta
     except KeyboardInterrupt:
         # Ctrl-C (or SIGTERM turned into it by the CLI): keep every completed collision.
         log.stop.reason = "interrupted"
         log.stop.message = f"interrupted at t = {float(ta.time):.17g} s after {log.count} collisions"
-        return None, steps
+        return None, steps, ta
     finally:
         if gc_was_enabled:
             gc.enable()
@@ -710,22 +723,74 @@ def _overlap(scene: Scene, precision: Precision, state, where: str) -> str:
 _INTEGRATORS = CompiledCache(32)
 
 
-def _integrator(system: SceneSystem, options: dict, cooldown):
-    """(taylor_adaptive, slots, nt_slots) for ``system``'s shape, built once and reused."""
+#: From this many bodies on, every mode is compiled in compact mode. Compilation in
+#: heyoka's default mode grows like N^2 (measured on a circle, double: 1.5 s for 8 bodies,
+#: 15.5 s for 32, about a minute for 64) and compact mode stays under a second, for
+#: 1.4-1.8x the cost per step (validation/many_bodies.py).
+COMPACT_FROM_BODIES = 12
+
+
+def _compact(system: SceneSystem) -> bool:
+    """Whether ``system`` is compiled in heyoka's compact mode."""
+    if system.n_bodies >= COMPACT_FROM_BODIES:
+        return True
+    # A cluster on a path track (contact forces solved in the equations) has a large
+    # decomposition: compact mode compiles it ~10x faster (measured 0.8 s against 8.4 s
+    # for two disks on a parabola) for ~2x the cost per step, in a mode that is rarely long.
+    return system.per_body and any(u.is_cluster or u.pinned for u in system.units)
+
+
+#: A mode compiled quickly (compact mode, no LLVM optimization: ~10x faster to
+#: compile, 2-3x slower per step) that lasts this many steps is compiled
+#: optimized and goes on with that. Modes after the first are often short (a
+#: cluster that splits again, a contact of a many-body cascade): measured on 16
+#: bodies in a circle, 16 modes cost 6.3 s of compilation for 1 s of integration.
+#: A step count, not a time, so that a run is the same every time.
+QUICK_STEPS = 4096
+
+
+def _integrator_key(system: SceneSystem, options: dict, cooldown, quick: bool) -> tuple:
+    return (system.shape, repr(options.get("tol")), options["high_accuracy"], repr(cooldown), quick)
+
+
+def _optimized_successor(system: SceneSystem, options: dict, cooldown, handlers, warnings, holder, stream):
+    """For a quickly compiled mode: ``optimized(ta)``, the optimized integrator taking over from ``ta``."""
+
+    def optimized(old):
+        new, slots, nt_slots = _integrator(system, options, cooldown)
+        slots[:], nt_slots[:] = handlers, warnings
+        new.pars[:] = old.pars  # as the junction callbacks left them
+        new.state[:] = old.state
+        new.dtime = old.dtime
+        new.reset_cooldowns()
+        holder[0], stream.ta = new.state, new
+        return new
+
+    return optimized
+
+
+def _compiled(system: SceneSystem, options: dict, cooldown) -> bool:
+    """Whether the optimized integrator of ``system``'s shape is compiled already."""
+    return _integrator_key(system, options, cooldown, False) in _INTEGRATORS
+
+
+def _integrator(system: SceneSystem, options: dict, cooldown, quick: bool = False):
+    """(taylor_adaptive, slots, nt_slots) for ``system``'s shape, built once and reused.
+
+    ``quick``: compiled in compact mode without LLVM optimization (see QUICK_STEPS).
+    """
 
     def build():
         slots: list = []
         nt_slots: list = []
         events, nt_events = mode_events(system, cooldown, slots, nt_slots)
-        # A cluster on a path track (contact forces solved in the equations) has a large
-        # decomposition: compact mode compiles it ~10x faster (measured 0.8 s against 8.4 s
-        # for two disks on a parabola) for ~2x the cost per step, in a mode that is rarely long.
-        # (Otherwise heyoka's default for the number type.)
-        compact = {"compact_mode": True} if system.per_body and any(u.is_cluster or u.pinned for u in system.units) else {}
+        if quick:
+            level = {"compact_mode": True, "opt_level": 0}
+        else:
+            level = {"compact_mode": True} if _compact(system) else {}
         ta = hy.taylor_adaptive(
-            system.equations, system.initial_state, t_events=events, nt_events=nt_events, **compact, **options,
+            system.equations, system.initial_state, t_events=events, nt_events=nt_events, **level, **options,
         )
         return ta, slots, nt_slots
 
-    key = (system.shape, repr(options.get("tol")), options["high_accuracy"], repr(cooldown))
-    return _INTEGRATORS.get(key, build)
+    return _INTEGRATORS.get(_integrator_key(system, options, cooldown, quick), build)

@@ -220,7 +220,16 @@ class SceneSystem:
         return tuple(c.pair for c in self.contacts)
 
     def offsets_float(self, unit: int) -> list[float]:
-        return [float(o) for o in self.units[unit].offsets]
+        return self._unit_floats[unit][0]
+
+    @functools.cached_property
+    def _unit_floats(self) -> tuple:
+        """Per unit: its offsets, members' weight moments and total generalized mass, as floats
+        (converted once: the contact gates use them after every collision)."""
+        return tuple(
+            ([float(o) for o in u.offsets], [self.weight[k] for k in u.members], sum(self.gen_mass[k] for k in u.members))
+            for u in self.units
+        )
 
     def expand(self, unit_state) -> list:
         """Full state [phi_1..phi_N, dphi_1..dphi_N] from a unit state."""
@@ -719,14 +728,11 @@ def gap_value(system: SceneSystem, number: int, unit_state) -> float:
 
 def unit_acceleration(system: SceneSystem, unit: int, psi: float) -> float:
     """psi'' of a unit at angle psi (floats; used to judge contacts)."""
-    members = system.units[unit].members
-    total = sum(system.gen_mass[k] for k in members)
-    return -sum(system.weight[k] * math.sin(psi + o) for k, o in zip(members, system.offsets_float(unit))) / total
+    offsets, weights, total = system._unit_floats[unit]
+    return -sum(w * math.sin(psi + o) for w, o in zip(weights, offsets)) / total
 
 
 def unit_jerk(system: SceneSystem, unit: int, psi: float, dpsi: float) -> float:
     """Third derivative of a unit's angle at psi, moving at dpsi (floats): d/dt of unit_acceleration."""
-    members = system.units[unit].members
-    total = sum(system.gen_mass[k] for k in members)
-    moments = sum(system.weight[k] * math.cos(psi + o) for k, o in zip(members, system.offsets_float(unit)))
-    return -dpsi * moments / total
+    offsets, weights, total = system._unit_floats[unit]
+    return -dpsi * sum(w * math.cos(psi + o) for w, o in zip(weights, offsets)) / total
