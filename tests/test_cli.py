@@ -152,7 +152,8 @@ def test_a_run_replaces_an_earlier_runs_outputs_and_leaves_other_files(tmp_path)
     # measured before: an old collisions.npy and old figures stayed beside a new collisions.csv
     out = tmp_path / "out"
     out.mkdir()
-    for name in ("collisions.npy", "energy.png", "phase_portrait.png", "passages.csv", ".collisions.csv.tmp"):
+    for name in ("collisions.npy", "collisions.parquet", "energy.png", "phase_portrait.png", "passages.csv",
+                 ".collisions.csv.tmp"):
         (out / name).write_text("stale")
     (out / "notes.txt").write_text("mine")
     assert main(["run", "--out", str(out), "--t-end", "2", "--no-figures", "--progress", "off"]) == 0

@@ -75,8 +75,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (measured: no gain on collision times or energy, ~1%% cost)")
     run.add_argument("--no-figures", action="store_true", help="skip the figures (phase_portrait.png, energy.png)")
     run.add_argument(
-        "--table", choices=("csv", "npy"), default="csv",
-        help="collision table format: csv (default) or npy (float64 columns, for long runs; numpy.load reads it)",
+        "--table", choices=("csv", "npy", "parquet"), default="csv",
+        help="collision table format: csv (default), npy (float64 columns, for long runs; numpy.load reads it) "
+             "or parquet (the same columns; needs pyarrow: pip install 'heyroll[parquet]')",
     )
     run.add_argument("--progress", choices=("auto", "on", "off"), default="auto", help="progress bar on stderr (auto: if a terminal)")
     val = sub.add_parser("validate", help="write a validation report: engine vs exact reference, series error, horizon")
@@ -129,8 +130,13 @@ def _run(args) -> int:
     scene = load_scene(args.scene) if args.scene else default_scene()
     out = _out_dir(args.out)
     precision = Precision.parse(args.precision, "--precision")
-    if args.table == "npy" and precision.name != "double":
-        raise BadInput("--table", "npy holds float64 columns: use csv for long, quad and MPFR runs")
+    if args.table in ("npy", "parquet") and precision.name != "double":
+        raise BadInput("--table", f"{args.table} holds float64 columns: use csv for long, quad and MPFR runs")
+    if args.table == "parquet":
+        try:
+            import pyarrow.parquet  # noqa: F401  (the parquet sink's writer)
+        except ImportError:
+            raise BadInput("--table", "parquet needs pyarrow: pip install 'heyroll[parquet]'") from None
     from .outputs import prepare_run_directory, remove_run_files, table_sink, write_run
 
     _writable(out)
