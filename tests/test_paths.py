@@ -565,3 +565,20 @@ def test_flat_and_straight_curves_run_against_closed_forms(y):
     t = 0.4
     assert float(result.final_state[0]) == pytest.approx(-1.0 + t + a * t * t / 2, abs=1e-13)
     assert float(result.final_state[1]) == pytest.approx(1.0 + a * t, abs=1e-13)
+
+
+def test_energy_surface_is_cut_above_the_potential_and_the_bodys_energy():
+    # Issue 13: uncut, the grid's corners (fast and far out) set the z scale and the wells look flat.
+    from heyroll.analysis.equilibria import problem_of
+    from heyroll.interfaces.portrait_figures import _velocity_range, body_energy, first_integral_grid, surface_top
+
+    scene = parse_scene(README_CURVE)
+    problem = problem_of(scene, 0)
+    q = np.linspace(*problem.domain, 160)
+    vmax = _velocity_range(scene, 0, q, problem)
+    H = first_integral_grid(scene, 0, q, np.linspace(-vmax, vmax, 120))
+    top = surface_top(scene, 0, q, problem, H)
+    own = body_energy(scene, 0, np.array([float(scene.q[0])]), np.array([float(scene.dq[0])]))[0] / float(scene.bodies[0].mass)
+    assert top > problem.potential(q).max() and top > own  # every well, saddle and the body's own level shown
+    assert top < H.max()  # the far corners cut off
+    assert (H <= top).mean() > 0.3

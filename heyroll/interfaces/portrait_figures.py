@@ -198,17 +198,32 @@ def energy_surface_figure(scene: Scene, path, *, body: int = 0) -> None:
     vmax = _velocity_range(scene, body, q, problem)
     v = np.linspace(-vmax, vmax, 120)
     H = first_integral_grid(scene, body, q, v)
+    top = surface_top(scene, body, q, problem, H)
     fig = Figure(figsize=(9, 6))
     ax = fig.add_subplot(projection="3d")
     Q, Vv = np.meshgrid(q, v)
-    ax.plot_surface(Q, Vv, H, cmap="viridis", linewidth=0, antialiased=True, alpha=0.9)
+    ax.plot_surface(Q, Vv, np.minimum(H, top), cmap="viridis", linewidth=0, antialiased=True, alpha=0.9)
+    ax.set_zlim(float(H.min()), top)
     xlabel, ylabel = _coordinate_label(scene)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_zlabel("H / m [J/kg]")
-    ax.set_title(f"{scene.name}: first integral (total mechanical energy in the rotating plane) of body {body + 1}",
+    ax.set_title(f"{scene.name}: first integral (total mechanical energy in the rotating plane) of body {body + 1}"
+                 f"\n(cut at H/m = {top:.4g} J/kg: the top of the potential, the body's energy, with a margin)",
                  fontsize=8)
     _save(fig, path)
+
+
+def surface_top(scene: Scene, body: int, q: np.ndarray, problem: EquilibriumProblem, H: np.ndarray) -> float:
+    """Where the energy surface is cut: above the highest potential on the track and the body's
+    own energy by a quarter of the range below them. Uncut, the corners of the grid (fast and far
+    out) set the scale and the wells and saddles that matter look flat (issue 13)."""
+    m = float(scene.bodies[body].mass)
+    V = problem.potential(q)
+    own = float(body_energy(scene, body, np.array([float(scene.q[body])]), np.array([float(scene.dq[body])]))[0]) / m
+    level = max(float(V.max()), own)  # V is per unit mass already
+    low = float(H.min())
+    return min(float(H.max()), level + 0.25 * max(level - low, 1e-12))
 
 
 def bifurcation_figure(scene: Scene, path, omegas, *, body: int = 0) -> list:
