@@ -760,38 +760,59 @@ def test_max_collisions_holds_when_the_last_collision_starts_a_contact():
 # -- the overlap guard ------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(
-    "case", ["touching start", "after a split", "after a cascade"],
-)
-def test_a_missed_collision_never_ends_completed(case, monkeypatch):
-    """With the gap opening switched off (the bugs above come back) the guard stops the run: status overlap."""
+MISSED_COLLISION_SCENES = {
+    "touching start": lambda: scene([body(phi="0.0"), body(mass="2.0", phi="0.2226820286819278", dphi="0.02")],
+                                    k="0.5", t_end="2"),
+    "after a split": lambda: scene(
+        [body(radius="0.20552171037334813", phi="-1.5492089749104005"),
+         body(radius="0.12647999996429304", phi="-1.1596784170279733")], k="0.0", t_end="5",
+    ),
+    "after a cascade": lambda: scene([body(phi="-1.0"), body(phi="0.0"), body(phi="1.0")], k="0.3", t_end="3"),
+}
+
+
+@pytest.mark.parametrize("case", list(MISSED_COLLISION_SCENES))
+def test_gaps_left_at_exactly_zero_never_end_in_an_unnoticed_overlap(case, monkeypatch):
+    """With the gap opening switched off (gaps left at exactly 0.0, which heyoka cannot see close
+    when its event only looks for closing: the bugs above) a run either still finds every
+    collision (the circle's gap events look both ways) or stops, status overlap: never completed
+    with the bodies through each other."""
     from heyroll.simulation import events
 
-    scenes = {
-        "touching start": scene([body(phi="0.0"), body(mass="2.0", phi="0.2226820286819278", dphi="0.02")],
-                                k="0.5", t_end="2"),
-        "after a split": scene(
-            [body(radius="0.20552171037334813", phi="-1.5492089749104005"),
-             body(radius="0.12647999996429304", phi="-1.1596784170279733")], k="0.0", t_end="5",
-        ),
-        "after a cascade": scene([body(phi="-1.0"), body(phi="0.0"), body(phi="1.0")], k="0.3", t_end="3"),
-    }
-    sc = scenes[case]
-    fixed = heyroll.simulate(sc)
+    sc = MISSED_COLLISION_SCENES[case]()
+    assert heyroll.simulate(sc).status is Status.COMPLETED
     monkeypatch.setattr(events, "OPEN_ULPS", 0)  # opening a gap by 0 ulps: exactly 0.0 stays
-    broken = heyroll.simulate(sc)
-    assert fixed.status is Status.COMPLETED
-    assert broken.status is Status.OVERLAP and not broken.success
-    assert "a collision was missed" in broken.message
-    t = float(re.search(r"at t = (\S+) s", broken.message).group(1))
-    assert t == float(broken.t_final) < float(sc.run.t_end)
-    # stopped where the gap reached -overlap_tolerance, not later
-    from heyroll.simulation.system import overlap_tolerance
+    broken = heyroll.simulate(sc, dense=True)
+    if broken.status is Status.COMPLETED:
+        assert min_gap(broken) >= GAP_FLOOR
+    else:
+        assert broken.status is Status.OVERLAP and "a collision was missed" in broken.message
 
-    gaps = pair_gaps(sc, broken.final_state)[0]
-    worst = int(np.argmin(gaps))
-    p = sc.pairs[worst]
-    assert gaps[worst] == pytest.approx(-overlap_tolerance(broken.final_state[p.j]), rel=1e-3)
+
+@pytest.mark.parametrize("case", list(MISSED_COLLISION_SCENES))
+def test_a_missed_collision_never_ends_completed(case, monkeypatch):
+    """Collision callbacks that ignore every collision (a missed collision, made on purpose): the
+    bodies pass into each other and the run stops, status overlap, where the gap comes back up
+    through zero (the circle's gap events look both ways, events.reopening_check) or, if it
+    never does, at the end of the mode or the run: never completed."""
+    from heyroll.simulation import events
+
+    real = events._make_callback
+
+    def blind(*args, **kwargs):
+        seeing = real(*args, **kwargs)
+
+        def on_gap(ta, d_sgn):
+            return True if d_sgn < 0 else seeing(ta, d_sgn)  # closing: ignored
+
+        on_gap.resolve = seeing.resolve
+        return on_gap
+
+    monkeypatch.setattr(events, "_make_callback", blind)
+    sc = MISSED_COLLISION_SCENES[case]()
+    broken = heyroll.simulate(sc)
+    assert broken.status is Status.OVERLAP and not broken.success
+    assert "a collision was missed" in broken.message and broken.n_collisions == 0
 
 
 @pytest.mark.parametrize("phi", ["0.0", "1e-10"])

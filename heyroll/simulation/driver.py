@@ -255,6 +255,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         ta.dtime = t
         if slots:
             ta.reset_cooldowns()
+        touched = getattr(settle, "touched", [])  # the circle's gap reopening checks (events.reopening_check)
+        touched[:] = [ta.dtime] * len(touched)
         # The full parameter vector (compiled contact functions may read some that the
         # integrator does not keep); the junction callbacks update it and the integrator's.
         holder[0], holder[1] = ta.state, np.array(params)

@@ -26,6 +26,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
+from typing import Callable
 
 import heyoka as hy
 import mpmath
@@ -119,12 +120,15 @@ def mode_handlers(
     settle = contact_settler(scene, system, resolvers, log, time_scale)
     # Three or more units: contacts can close at the same instant.
     cascade = settle if system.n_units > 2 else None
+    # The (double-length) time of each contact's last collision, or of the mode's start (the
+    # driver sets it): where its gap was last known at zero or above (reopening_check).
+    touched = settle.touched = [(0.0, 0.0)] * len(system.contacts)
     for number in range(len(system.contacts)):
         if fast:
-            handler = _make_callback(scene, system, number, log, holder, time_scale, cascade)
+            handler = _make_callback(scene, system, number, log, holder, time_scale, cascade, touched, settle)
             resolvers.append(lambda s, t, resolve=handler.resolve: resolve(s, s.tolist(), t))
         else:
-            handler = _make_unit_callback(scene, system, number, log, holder, time_scale, settle)
+            handler = _make_unit_callback(scene, system, number, log, holder, time_scale, settle, touched)
             resolvers.append(handler.resolve)
         handlers.append(handler)
     return _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, settle)
@@ -142,7 +146,7 @@ def _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, se
                      for ev in system.bound_events]
     handlers += [_stopper(log, "release", {"bodies": (k,)}) for k in system.release_events]
     handlers += [_track_stopper(log, ev, holder, system) for ev in system.track_events if ev.terminal]
-    handlers += [_overlap_stopper(log, number, holder, system) for number in range(len(system.contacts))]
+    handlers += [_overlap_stopper(log, number, holder, system) for number in range(len(system.guard_expressions))]
     warnings = [_track_warning(log, ev, system) for ev in system.track_events if not ev.terminal]
     return handlers, warnings, settle
 
@@ -202,13 +206,16 @@ def mode_events(system: SceneSystem, cooldown, slots: list, nt_slots: list) -> t
     def forward_nt(n):
         return lambda ta, t, d_sgn: nt_slots[n](ta, t, d_sgn)
 
+    # Without guards (SceneSystem.gap_reopening) the gap events fire both ways: closing is a
+    # collision, coming back up through zero a check (reopening_check). Both ways cost nothing more.
+    gap_direction = hy.event_direction.any if system.gap_reopening else negative
     events = [
         # heyoka's default cooldown (scaled by 1/|gap'|) hides the quick
         # re-collisions of an accumulating (Zeno) sequence; one ulp of the
         # motion's time scale is far below any interval the contact criterion
         # lets through, and direction filtering does the rest. (A cooldown of
         # exactly 0 loses collisions: measured.)
-        hy.t_event(gap, callback=forward(n), direction=negative, cooldown=cooldown, **options)
+        hy.t_event(gap, callback=forward(n), direction=gap_direction, cooldown=cooldown, **options)
         for n, gap in enumerate(system.gap_expressions)
     ]
     n_gaps = len(system.gap_expressions)
@@ -301,6 +308,55 @@ def _overlap_stopper(log, number, holder, system):
     return stop
 
 
+def reopening_check(system: SceneSystem, number: int, log: CollisionLog, holder: list, touched: list, settle):
+    """``check(ta) -> bool`` for the gap of contact ``number`` coming back up through zero
+    (circle, fixed plane: :attr:`SceneSystem.gap_reopening`).
+
+    A gap rises through zero only from below. Right after the pair's own
+    collision that is rounding: heyoka's root leaves the gap a few ulps either
+    side of zero. Otherwise the bodies had overlapped, a collision was missed.
+    Since the pair's last collision or the mode's start (``touched[number]``,
+    heyoka's double-length time: a long run's time has ulps of ~1e-11 s) the gap can have been at
+    most |g'| dt + |g''| dt^2 / 2 + J dt^3 / 6 below zero (Taylor's formula
+    backwards from now; J = sum over the two units of A (|psi'| + A dt) bounds
+    the third derivative, A = the unit's bound on |psi''|,
+    :meth:`SceneSystem.acceleration_bound`; |g''| from the state, as with
+    the bound A in its place a plastic pair near the bottom whose gap had
+    dipped ~1e-13 rad was flagged: found by tests/test_fuzz.py). Within overlap_tolerance that is
+    rounding, or a dip the guard events this replaces let pass too (they
+    fired at -overlap_tolerance), and the gap is lifted to >= 0 by an ulp or two (``settle.lift_gap``): left
+    there, with a slow opening (the end of a Zeno sequence) the rounded gap
+    stays an ulp below zero and the event, truncating every step at its root,
+    fired again every ~1e-13 s (measured: 36,000 times in 4e-9 s).
+    Beyond it the run stops, status overlap. (True: go on.)
+    """
+    contact = system.contacts[number]
+    a, b, nu = contact.unit_a, contact.unit_b, system.n_units
+    bound_a, bound_b = system.acceleration_bound(a), system.acceleration_bound(b)
+
+    def check(ta) -> bool:
+        s = holder[0]
+        hi, lo = ta.dtime
+        t_hi, t_lo = touched[number]
+        dt = float((hi - t_hi) + (lo - t_lo))
+        psi_a, psi_b, va, vb = float(s[a]), float(s[b]), float(s[nu + a]), float(s[nu + b])
+        acceleration = unit_acceleration(system, b, psi_b) - unit_acceleration(system, a, psi_a)
+        jerk = bound_a * (abs(va) + bound_a * dt) + bound_b * (abs(vb) + bound_b * dt)
+        depth = abs(vb - va) * dt + abs(acceleration) * dt * dt / 2 + jerk * dt * dt * dt / 6
+        if depth <= overlap_tolerance(psi_b):
+            settle.lift_gap(s, number)
+            return True
+        i, j = contact.pair.i, contact.pair.j
+        log.stop.reason = "overlap"
+        log.stop.message = (
+            f"bodies {i + 1} and {j + 1} overlapped: their gap came back up through zero at t = {float(hi):.17g} s, "
+            f"{dt:.3g} s after their last collision or the start of the mode: a collision was missed; stopped"
+        )
+        return False
+
+    return check
+
+
 def below_resolution(opening, gap_acceleration, restitution, t, scale, time_scale, eps, gap_jerk=0.0) -> bool:
     """Whether the bounces left after a collision are below the run's resolution.
 
@@ -388,11 +444,6 @@ def unit_map(system: SceneSystem, a: int, b: int, restitution) -> ImpulseMap:
         return ImpulseMap(q=mpmath.mpf(1), a_i=(1 + k) * Mb / (Ma + Mb), a_j=(1 + k) * Ma / (Ma + Mb), one_plus_k=1 + k)
 
 
-#: numpy's extended type where it has more bits than a double (x86: 64-bit
-#: mantissa), else None: then the map runs in the run's own type.
-EXTENDED = np.longdouble if np.finfo(np.longdouble).nmant > 52 else None
-
-
 @dataclass(frozen=True)
 class WorkingMap:
     """The collision map of one pair in the arithmetic a run applies it in.
@@ -401,32 +452,31 @@ class WorkingMap:
     with a_i = (1 + k) - q a_j enforced on the rounded constants, which makes
     the elastic map conserve a fixed quadratic form (within a rounding of the
     kinetic energy) exactly: no constant's rounding biases every collision the
-    same way. Double runs evaluate the map in extended precision and round the
-    two outgoing rates once, so the energy error of a long elastic run is a
-    random walk (Brouwer's law), not a drift.
+    same way. Double runs evaluate the map in double-double arithmetic
+    (:func:`_double_double_map`) and round the two outgoing rates once, so the
+    energy error of a long elastic run is a random walk (Brouwer's law), not a
+    drift; other precisions in the run's own type. ``apply(vi, vj)`` gives
+    the two outgoing rates.
     """
 
     q: object
     a_i: object
     a_j: object
-    extended: bool
+    apply: Callable = field(compare=False, repr=False)
 
 
 @functools.lru_cache(maxsize=256)
 def working_map(law_map, precision) -> WorkingMap:
     """Round the law's constants once for ``precision`` (see :class:`WorkingMap`)."""
-    extended = precision.name == "double" and EXTENDED is not None
-    if extended:
-
-        def num(x):
-            with mpmath.workprec(256):
-                return EXTENDED(mpmath.nstr(mpmath.mpf(x), 25, strip_zeros=False))
-
-    else:
-        num = precision.number
+    if precision.name == "double":
+        with mpmath.workprec(256):
+            q, a_j = _double_double(law_map.q), _double_double(law_map.a_j)
+            a_i = _double_double(law_map.one_plus_k - (mpmath.mpf(q[0]) + q[1]) * (mpmath.mpf(a_j[0]) + a_j[1]))
+        return WorkingMap(q=q, a_i=a_i, a_j=a_j, apply=_double_double_map(q, a_i, a_j))
+    num = precision.number
 
     def exact(x):
-        if hasattr(x, "as_integer_ratio"):  # float, longdouble: the binary value exactly
+        if hasattr(x, "as_integer_ratio"):  # longdouble: the binary value exactly
             n, d = x.as_integer_ratio()
             return mpmath.mpf(n) / d
         return mpmath.mpf(str(x))  # real128 / real: their text round-trips at their precision
@@ -434,20 +484,74 @@ def working_map(law_map, precision) -> WorkingMap:
     q, a_j = num(law_map.q), num(law_map.a_j)
     with mpmath.workprec(4 * max(precision.bits, 64) + 64):
         a_i = num(law_map.one_plus_k - exact(q) * exact(a_j))  # a_i + q a_j = 1 + k
-    return WorkingMap(q=q, a_i=a_i, a_j=a_j, extended=extended)
+
+    def apply(vi, vj):
+        d = vi - q * vj
+        return vi - a_i * d, vj + a_j * d
+
+    return WorkingMap(q=q, a_i=a_i, a_j=a_j, apply=apply)
 
 
-def _apply(m: "WorkingMap", vi, vj):
-    if m.extended:
-        ei, ej = EXTENDED(vi), EXTENDED(vj)
-        d = ei - m.q * ej
-        return float(ei - m.a_i * d), float(ej + m.a_j * d)
-    d = vi - m.q * vj
-    return vi - m.a_i * d, vj + m.a_j * d
+def _double_double(x) -> tuple[float, float]:
+    """x as hi + lo, two doubles (~106 bits)."""
+    hi = float(x)
+    return hi, float(mpmath.mpf(x) - hi)
+
+
+#: Dekker's splitter: c = 2^27 + 1; x = hi + lo with halves of 26 bits whose products are exact.
+_SPLIT = 134217729.0
+
+
+def _double_double_map(q, a_i, a_j):
+    """``apply(vi, vj)``: the map with double-double constants, each product exact
+    (Dekker's two-product) and each sum with its error (Knuth's two-sum), rounded
+    once at the end. Pure float arithmetic: numpy's long double scalars took 2.7 us
+    a collision (measured), this ~1 us, with ~30 more bits."""
+    qh, ql = q
+    aih, ail = a_i
+    ajh, ajl = a_j
+    qh1, qh2 = _halves(qh)
+    aih1, aih2 = _halves(aih)
+    ajh1, ajh2 = _halves(ajh)
+    S = _SPLIT
+
+    def apply(vi, vj):
+        c = S * vj
+        vh = c - (c - vj)
+        vl = vj - vh
+        p = qh * vj  # p + e = q vj
+        e = ((qh1 * vh - p) + qh1 * vl + qh2 * vh) + qh2 * vl + ql * vj
+        s = vi - p  # dh + dl = vi - q vj
+        z = s - vi
+        t = ((vi - (s - z)) - (p + z)) - e
+        dh = s + t
+        dl = t - (dh - s)
+        c = S * dh
+        d1 = c - (c - dh)
+        d2 = dh - d1
+        p = aih * dh  # vi - a_i d
+        e = ((aih1 * d1 - p) + aih1 * d2 + aih2 * d1) + aih2 * d2 + aih * dl + ail * dh
+        s = vi - p
+        z = s - vi
+        vi_new = s + (((vi - (s - z)) - (p + z)) - e)
+        p = ajh * dh  # vj + a_j d
+        e = ((ajh1 * d1 - p) + ajh1 * d2 + ajh2 * d1) + ajh2 * d2 + ajh * dl + ajl * dh
+        s = vj + p
+        z = s - vj
+        vj_new = s + (((vj - (s - z)) + (p - z)) + e)
+        return vi_new, vj_new
+
+    return apply
+
+
+def _halves(x: float) -> tuple[float, float]:
+    c = _SPLIT * x
+    hi = c - (c - x)
+    return hi, x - hi
 
 
 def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float,
-                   cascade=None):
+                   cascade=None, touched=None, settle=None):
     """The hot path: every body free, the state is [phi_1..phi_N, dphi_1..dphi_N].
 
     Returns the event callback; its ``resolve(s, before, t)`` applies the law
@@ -459,7 +563,7 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     pair_index = contact.pair_index
     law_map = working_map(pair.law_map, system.precision)
     fallback = working_map(fallback_map(scene, pair), system.precision)
-    q, a_i, a_j = law_map.q, law_map.a_i, law_map.a_j
+    apply = law_map.apply
     i, j = pair.i, pair.j
     vi_index = system.n_bodies + i
     vj_index = system.n_bodies + j
@@ -471,7 +575,6 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     limit = log.max_collisions
     stop = log.stop
     law_name = system.law_name
-    extended = law_map.extended
     strict = scene.on_inconsistent == "error"
     a_i_stiff = float(scene.track.angular_stiffness(scene.bodies[i], scene.g))
     a_j_stiff = float(scene.track.angular_stiffness(scene.bodies[j], scene.g))
@@ -479,6 +582,7 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     # below_resolution can only hold if v^2 <= 2 A h_res or v <= A (1 - k) t_res / 2, A <= a_i + a_j.
     h_bound = 2 * (a_i_stiff + a_j_stiff) * RESOLUTION_ULPS * eps
     t_bound = (a_i_stiff + a_j_stiff) * (1 - k) * RESOLUTION_ULPS * eps / 2
+    reopened = reopening_check(system, number, log, holder, touched, settle) if system.gap_reopening else None
 
     def resolve(s, before, t) -> bool:
         """Apply the law (or the policy) to this pair, record it; False: stop the run.
@@ -490,15 +594,7 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         """
         vi = before[vi_index]
         vj = before[vj_index]
-        if extended:
-            ei, ej = EXTENDED(vi), EXTENDED(vj)
-            d = ei - q * ej
-            vi_new = float(ei - a_i * d)
-            vj_new = float(ej + a_j * d)
-        else:
-            d = vi - q * vj
-            vi_new = vi - a_i * d
-            vj_new = vj + a_j * d
+        vi_new, vj_new = apply(vi, vj)
         flag = 0
         # The gap opens at rate vj_new - vi_new; it closed at vi - vj.
         closing = vi - vj
@@ -514,7 +610,7 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
                     "stopped (collision.on_inconsistent = 'error')"
                 )
                 return False
-            vi_new, vj_new = _apply(fallback, vi, vj)
+            vi_new, vj_new = fallback.apply(vi, vj)
             flag = 1
             log.fallbacks += 1
         append((t, pair_index, before, vi_new, vj_new, flag))
@@ -525,9 +621,12 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         return True
 
     def on_collision(ta, d_sgn):
+        if d_sgn >= 0:  # the gap rising through zero (events both ways: SceneSystem.gap_reopening)
+            return d_sgn == 0 or reopened(ta)
         s = holder[0]
         before = s.tolist()  # Python numbers: faster arithmetic than numpy scalars
-        t = ta.time
+        t, t_lo = ta.dtime
+        touched[number] = (t, t_lo)
         if not resolve(s, before, t):
             return False
         # This pair's event is in heyoka's cooldown: the settler leaves its gap alone.
@@ -669,6 +768,15 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
     constants = [g[2] for g in geometry]
     typed: dict = {}
 
+    ulp = system.precision.number(eps)
+
+    def lift_gap(s, number):
+        """A gap just below zero (rounding) to >= 0 by the least move of its second unit."""
+        a, b, constant = geometry[number]
+        g = s[b] - s[a] + constant
+        if g < 0:
+            s[b] = s[b] - g + ulp * (1 + abs(s[b]))
+
     def touching_elsewhere(s) -> list:
         c = typed.get(s.dtype)
         if c is None:
@@ -723,11 +831,12 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                 open_gap(s, number, scale)
         return True
 
+    settle.lift_gap = lift_gap  # for a gap rising through zero (reopening_check)
     return settle
 
 
 def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float,
-                        settle=None):
+                        settle=None, touched=None):
     """Collisions when some bodies move as clusters: the state holds unit coordinates.
 
     Two free bodies collide by the scene's law (and policy); a collision that
@@ -748,13 +857,14 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
     k = float(scene.law.restitution)
     strict = scene.on_inconsistent == "error"
     stop = log.stop
+    reopened = reopening_check(system, number, log, holder, touched, settle) if system.gap_reopening else None
 
     def resolve(s, t) -> bool:
         """Apply the law (or the policy), record it; False: stop the run (policy, max_collisions)."""
         state = s.tolist()
         before = system.expand(state)
         va, vb = state[nu + a], state[nu + b]
-        va_new, vb_new = _apply(law, va, vb)
+        va_new, vb_new = law.apply(va, vb)
         flag = 0 if both_free else 2
         if vb_new - va_new < -SEPARATION_ULPS * eps * (va - vb):
             if strict:
@@ -764,7 +874,7 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
                     f"still approach after the '{system.law_name}' law; stopped (collision.on_inconsistent = 'error')"
                 )
                 return False
-            va_new, vb_new = _apply(fallback, va, vb)
+            va_new, vb_new = fallback.apply(va, vb)
             flag = 1
             log.fallbacks += 1
         s[nu + a], s[nu + b] = va_new, vb_new
@@ -775,8 +885,11 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
         return True
 
     def on_collision(ta, d_sgn):
+        if d_sgn >= 0:  # the gap rising through zero (events both ways: SceneSystem.gap_reopening)
+            return d_sgn == 0 or reopened(ta)
         s = holder[0]
-        t = ta.time
+        t, t_lo = ta.dtime
+        touched[number] = (t, t_lo)
         if not resolve(s, t):
             return False
         if settle is not None and not settle(s, t, (a, b), number):
