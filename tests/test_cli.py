@@ -82,7 +82,8 @@ def test_bad_scene_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, ca
 
 @pytest.mark.parametrize(
     "args",
-    [["--t-end", "nan"], ["--t-end", "-1"], ["--t-end", "inf"], ["--max-collisions", "-2"], ["--max-collisions", "x"], ["--precision", "octuple"], ["--precision", "mp:12"], ["--bogus"]],
+    [["--t-end", "nan"], ["--t-end", "-1"], ["--t-end", "inf"], ["--max-collisions", "-2"], ["--max-collisions", "x"], ["--precision", "octuple"], ["--precision", "mp:12"], ["--bogus"],
+     ["--tolerance", "0"], ["--tolerance", "1"], ["--tolerance", "x"], ["--tolerance", "nan"]],
 )
 def test_bad_arguments_exit_2_and_write_nothing(tmp_path, capsys, args):
     out = tmp_path / "out"
@@ -213,3 +214,18 @@ def test_drawn_branches_are_pieces_of_the_run_ending_at_the_next_collision():
     for b in branches:
         gaps = scene.gap(0, 1, b.states[:, 0], b.states[:, 1])
         assert gaps.min() > -1e-9
+
+
+def test_fast_and_tolerance_are_run_settings_recorded_in_the_summary(tmp_path):
+    out = tmp_path / "fast"
+    assert main(["run", "--fast", "--tolerance", "1e-13", "--t-end", "20", "--no-figures", "--progress", "off",
+                 "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "completed" and summary["fast_math"] is True and summary["tolerance"] == 1e-13
+    default = tmp_path / "default"
+    assert main(["run", "--t-end", "20", "--no-figures", "--progress", "off", "--out", str(default)]) == 0
+    reference = json.loads((default / "summary.json").read_text())
+    assert reference["fast_math"] is False and summary["collisions"] == reference["collisions"]
+    # The price: the elastic scene's energy error grows, still small over 20 s.
+    error = abs(summary["energy_final"] - summary["energy_initial"]) / summary["energy_initial"]
+    assert error < 1e-9

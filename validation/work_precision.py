@@ -264,15 +264,16 @@ def heyroll_rows(scene, n, t_end, ref_times, ref_pairs, repeats) -> list[Row]:
     """All heyroll configurations; their timings are taken round-robin (interference spreads evenly)."""
     import heyroll
 
-    configs = [("heyroll double", "double", tol, False) for tol in HEYROLL_TOLERANCES]
-    configs += [("heyroll double HA", "double", None, True), ("heyroll quad", "quad", None, False)]
+    configs = [("heyroll double", "double", tol, False, False) for tol in HEYROLL_TOLERANCES]
+    configs += [("heyroll double HA", "double", None, True, False), ("heyroll quad", "quad", None, False, False),
+                ("heyroll double --fast", "double", None, False, True)]
 
-    def runner(precision, tol, ha):
+    def runner(precision, tol, ha, fast):
         return lambda: heyroll.simulate(
-            scene, t_end=t_end, max_collisions=n, precision=precision, tolerance=tol, high_accuracy=ha
+            scene, t_end=t_end, max_collisions=n, precision=precision, tolerance=tol, high_accuracy=ha, fast_math=fast
         )
 
-    runs = [runner(p, tol, ha) for _, p, tol, ha in configs]
+    runs = [runner(p, tol, ha, fast) for _, p, tol, ha, fast in configs]
     # Warm-up of each configuration: a JIT compilation from scratch (heyoka's
     # in-memory cache cleared, its disk cache off for this call), then the
     # first call of a new process that finds the code in the disk cache.
@@ -294,7 +295,7 @@ def heyroll_rows(scene, n, t_end, ref_times, ref_pairs, repeats) -> list[Row]:
         return len(samples[k]) < repeats or (sum(samples[k]) < MIN_TIMED_S and len(samples[k]) < MAX_REPEATS)
 
     while any(needs(k) for k in range(len(configs))):
-        for k, (run, (_, precision, tol, ha)) in enumerate(zip(runs, configs)):
+        for k, (run, (_, precision, tol, ha, fast)) in enumerate(zip(runs, configs)):
             if not needs(k):
                 continue
             start = time.process_time()
@@ -307,7 +308,7 @@ def heyroll_rows(scene, n, t_end, ref_times, ref_pairs, repeats) -> list[Row]:
                     print(f"  (integration-only timing unavailable: {exc!r})", flush=True)
                     integration_ok = False
     rows = []
-    for k, (method, precision, tol, ha) in enumerate(configs):
+    for k, (method, precision, tol, ha, fast) in enumerate(configs):
         result, cpu = results[k], min(samples[k])
         pairs = [(result.pairs[m].i + 1, result.pairs[m].j + 1) for m in result.pair_numbers]
         if result.success:
@@ -534,6 +535,8 @@ def main(argv=None) -> int:
     parser.add_argument("--collisions", type=int, default=30, help="number of collisions compared (default 30)")
     parser.add_argument("--quick", action="store_true", help="rtol every 3 decades and one repeat (a smoke run)")
     parser.add_argument("--repeat", type=int, default=3, help="repeats per timing, best taken (default 3)")
+    parser.add_argument("--long-t-end", type=float, default=20000.0,
+                        help="t_end of the long runs of the speed-options section (default 20000 s)")
     args = parser.parse_args(argv)
     try:
         import scipy
@@ -573,6 +576,8 @@ def main(argv=None) -> int:
     print("scipy solve_ivp:", flush=True)
     rows += scipy_rows(baseline, scene, n, t_end, ref_times, ref_pairs, repeats, rtols)
     sensitivity = baseline_sensitivity(baseline, scene, n, t_end, ref_times, ref_pairs, repeats)
+    print("speed options, long runs:", flush=True)
+    price = speed_option_lines(scene, args.long_t_end, repeats)
 
     REPORTS.mkdir(exist_ok=True)
     make_figure(rows, REPORTS / "work_precision.png", n)
@@ -618,6 +623,7 @@ def main(argv=None) -> int:
         "",
         "![work-precision](work_precision.png)",
         "",
+        *price,
         *notes_lines(rows, baseline),
         "## Reference",
         "",
@@ -667,6 +673,51 @@ def main(argv=None) -> int:
     print("\n".join(headline_lines(h)))
     print(f"\nwrote {REPORTS / 'work_precision.md'} and {REPORTS / 'work_precision.png'}")
     return 0
+
+
+#: The options a user can trade accuracy for speed with (RunOptions fields; CLI --tolerance, --fast).
+SPEED_OPTIONS = (
+    ("default (tol = eps)", {}),
+    ("--fast", {"fast_math": True}),
+    ("--tolerance 1e-13", {"tolerance": 1e-13}),
+    ("--tolerance 1e-13 --fast", {"tolerance": 1e-13, "fast_math": True}),
+)
+
+
+def speed_option_lines(scene, t_end: float, repeats: int) -> list[str]:
+    """Collisions/s and the elastic default scene's energy error over a long run, per speed option.
+
+    The short runs above measure collision times; the price of a larger
+    tolerance or of fast-math shows in a long run, where the energy error
+    (exactly 0 for the elastic scene) accumulates. Timings round-robin.
+    """
+    import heyroll
+
+    for _, fields in SPEED_OPTIONS:
+        heyroll.simulate(scene, t_end=1.0, **fields)  # compile once
+    best = [0.0] * len(SPEED_OPTIONS)
+    results = [None] * len(SPEED_OPTIONS)
+    for _ in range(max(repeats, 2)):
+        for k, (_, fields) in enumerate(SPEED_OPTIONS):
+            start = time.perf_counter()
+            results[k] = heyroll.simulate(scene, t_end=t_end, max_collisions=None, **fields)
+            best[k] = max(best[k], results[k].n_collisions / (time.perf_counter() - start))
+    lines = [
+        "## The price of speed: `--fast` and `--tolerance`",
+        "",
+        f"The default scene (elastic) to t_end = {t_end:g} s, best of {max(repeats, 2)} interleaved runs: "
+        "collisions per second (wall) and the relative energy error at the end, which is exactly 0 for this "
+        "scene, so it is the accuracy a long run pays.",
+        "",
+        "| option | collisions | collisions/s | / default | relative energy error | / default |",
+        "|---|---|---|---|---|---|",
+    ]
+    errors = [abs(r.energy_final - r.energy_initial) / abs(r.energy_initial) for r in results]
+    for (name, _), r, rate, err in zip(SPEED_OPTIONS, results, best, errors):
+        lines.append(f"| {name} | {r.n_collisions} | {rate:.3g} | {rate / best[0]:.2f} | {err:.2e} | "
+                     f"{err / max(errors[0], 1e-300):.3g} |")
+        print(f"  {name:26s} {rate:.3g} collisions/s, energy error {err:.2e}", flush=True)
+    return lines + [""]
 
 
 def notes_lines(rows: list[Row], baseline) -> list[str]:

@@ -43,6 +43,16 @@ def _positive_time(text: str) -> float:
     return value
 
 
+def _tolerance(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise BadInput("--tolerance", f"must be a number, got {text!r}") from None
+    if not math.isfinite(value) or not 0 < value < 1:
+        raise BadInput("--tolerance", f"must be a number > 0 and < 1, got {text}")
+    return value
+
+
 def _collision_count(text: str, field: str = "--max-collisions") -> int:
     try:
         value = int(text)
@@ -72,6 +82,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="double | long (x87 extended) | quad | mp:BITS: the whole integration, every event and collision "
              "map in that type (default: double)"
     )
+    run.add_argument("--tolerance", help="heyoka's error tolerance (default: the precision's epsilon; larger is faster and "
+                     "less accurate: validation/reports/work_precision.md)")
+    run.add_argument("--fast", action="store_true",
+                     help="heyoka's fast-math flags: faster steps, results no longer reproducible to the last bit "
+                          "(validation/reports/work_precision.md)")
     run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (measured: no gain on collision times or energy, ~1%% cost)")
     run.add_argument("--no-figures", action="store_true", help="skip the figures (phase_portrait.png, energy.png)")
     run.add_argument(
@@ -130,6 +145,7 @@ def _run(args) -> int:
     scene = load_scene(args.scene) if args.scene else default_scene()
     out = _out_dir(args.out)
     precision = Precision.parse(args.precision, "--precision")
+    tolerance = _tolerance(args.tolerance) if args.tolerance is not None else None
     if args.table in ("npy", "parquet") and precision.name != "double":
         raise BadInput("--table", f"{args.table} holds float64 columns: use csv for long, quad and MPFR runs")
     if args.table == "parquet":
@@ -146,7 +162,8 @@ def _run(args) -> int:
         with _progress_bar(args.progress, scene, t_end) as progress, _sigterm_as_interrupt(), _heyoka_messages():
             result = simulate(
                 scene, t_end=t_end, max_collisions=max_collisions, max_events=max_events, precision=precision,
-                high_accuracy=args.high_accuracy, sink=sink, progress=progress,
+                high_accuracy=args.high_accuracy, tolerance=tolerance, fast_math=args.fast, sink=sink,
+                progress=progress,
             )
         write_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures, sink=sink)
     except OSError as exc:

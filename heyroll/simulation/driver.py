@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import gc
 import math
 import signal
@@ -100,7 +101,10 @@ class RunOptions:
     summation (measured on the default scene: no change of the collision
     times over tens of collisions nor of the energy error over 1e6
     collisions, a few per cent of cost, validation/long_runs.py);
-    ``watch_all_contacts`` also watches pairs the scene's energy cannot
+    ``fast_math`` compiles with heyoka's fast-math flags (LLVM may reorder and
+    contract floating-point operations: faster steps, results no longer
+    reproducible to the last bit; the speed and accuracy price are measured in
+    validation/work_precision.py); ``watch_all_contacts`` also watches pairs the scene's energy cannot
     bring together; ``chunk_size`` collisions are handed to a sink at a
     time; ``dense`` keeps heyoka's continuous output of the whole run
     (``SimulationResult.dense``, for figures; memory grows with the run);
@@ -116,6 +120,7 @@ class RunOptions:
     precision: object = "double"
     tolerance: object = None
     high_accuracy: bool = False
+    fast_math: bool = False
     watch_all_contacts: bool = False
     chunk_size: int = 65536
     dense: bool = False
@@ -192,6 +197,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         raise ValueError("max_collisions must be >= 0")
     pairs = scene.pairs if watch_all_contacts else None
     options = dict(precision.integrator_options(), high_accuracy=high_accuracy)
+    if opts.fast_math:
+        options["fast_math"] = True
     if tolerance is not None:
         options["tol"] = precision.number(tolerance)
     time_scale = motion_time_scale(scene)
@@ -371,6 +378,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         settings={
             "tolerance": float(precision.epsilon if tolerance is None else tolerance),
             "high_accuracy": high_accuracy,
+            "fast_math": opts.fast_math,
             "t_end": float(t_end),
             "max_collisions": limit,
             "max_events": events,
@@ -540,6 +548,7 @@ def _initial_contacts(scene, precision, pairs, units, full_state, system=None):
     return units, full_state
 
 
+@functools.lru_cache(maxsize=256)
 def motion_time_scale(scene: Scene) -> float:
     """The motion's time scale (s): 1/sqrt of the stiffest body's g/(kappa rho) on a circle,
     sqrt(L/g) on an open track of length L (the longest body's range)."""
@@ -698,12 +707,19 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
     return Status.FAILED, f"the integrator stopped with outcome {outcome!s}"
 
 
+@functools.lru_cache(maxsize=256)
+def _gap_constants(scene: Scene) -> tuple[float, ...]:
+    """offset - beta of each pair as a float (linear gaps; converted once per scene)."""
+    return tuple(float(p.gap_constant()) for p in scene.pairs) if scene.track.linear_gap else (None,) * len(scene.pairs)
+
+
 def _overlap(scene: Scene, precision: Precision, state, where: str) -> str:
     """A message if a pair's gap is below -overlap_tolerance in ``state`` (a full state), else ''."""
     n = len(scene.bodies)
-    for p in scene.pairs:
+    constants = _gap_constants(scene)
+    for p, constant in zip(scene.pairs, constants):
         if scene.track.linear_gap:
-            gap = float(state[p.j]) - float(state[p.i]) + float(p.gap_constant())
+            gap = float(state[p.j]) - float(state[p.i]) + constant
             unit = "rad"
         else:
             gap = float(scene.gap(p.i, p.j, float(state[p.i]), float(state[p.j])))
@@ -752,7 +768,8 @@ QUICK_STEPS = 4096
 
 
 def _integrator_key(system: SceneSystem, options: dict, cooldown, quick: bool) -> tuple:
-    return (system.shape, repr(options.get("tol")), options["high_accuracy"], repr(cooldown), quick)
+    return (system.shape, repr(options.get("tol")), options["high_accuracy"], options.get("fast_math", False),
+            repr(cooldown), quick)
 
 
 def _optimized_successor(system: SceneSystem, options: dict, cooldown, handlers, warnings, holder, stream):

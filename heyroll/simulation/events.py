@@ -576,8 +576,9 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     stop = log.stop
     law_name = system.law_name
     strict = scene.on_inconsistent == "error"
-    a_i_stiff = float(scene.track.angular_stiffness(scene.bodies[i], scene.g))
-    a_j_stiff = float(scene.track.angular_stiffness(scene.bodies[j], scene.g))
+    # g / (kappa rho) = W / G, from the system's floats (no mpmath in a run's set-up)
+    a_i_stiff = system.weight[i] / system.gen_mass[i]
+    a_j_stiff = system.weight[j] / system.gen_mass[j]
     sin, cos = math.sin, math.cos
     # below_resolution can only hold if v^2 <= 2 A h_res or v <= A (1 - k) t_res / 2, A <= a_i + a_j.
     h_bound = 2 * (a_i_stiff + a_j_stiff) * RESOLUTION_ULPS * eps
@@ -700,9 +701,7 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
         by_unit.setdefault(c.unit_b, []).append(number)
         right_of[c.unit_a] = number
         left_of[c.unit_b] = number
-        with workprec():  # in the run's own type: a touching gap is zero to its ulps
-            constant = system.precision.number(c.pair.offset - c.pair.beta - system.units[c.unit_a].offsets[-1])
-        geometry.append((c.unit_a, c.unit_b, constant))
+        geometry.append((c.unit_a, c.unit_b, system.gap_constants[number]))
     max_rounds = 64 * system.n_bodies
 
     def gap(s, number):

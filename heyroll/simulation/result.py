@@ -50,7 +50,7 @@ _MEANINGS = {
     Status.INTERRUPTED: "stopped by Ctrl-C or SIGTERM; the table holds every collision before the stop",
     Status.LEFT_TRACK: "a body would leave a one-sided track (its normal force reached 0)",
     Status.SLIP: "the friction needed to roll exceeded mu N",
-    Status.OVERLAP: "a collision was missed (a gap went below the overlap tolerance)",
+    Status.OVERLAP: "a collision was missed (the bodies overlapped by more than the overlap tolerance)",
     Status.FAILED: "the integrator could not go on",
 }
 

@@ -224,6 +224,14 @@ class SceneSystem:
     def pairs(self) -> tuple[ContactPair, ...]:
         return tuple(c.pair for c in self.contacts)
 
+    @functools.cached_property
+    def gap_constants(self) -> tuple:
+        """Per watched contact (linear gaps): offset - beta - o_last of unit a, in the run's own type
+        (a touching gap is zero to its ulps); rounded once per system, not at every mode start."""
+        with workprec():
+            return tuple(self.precision.number(c.pair.offset - c.pair.beta - self.units[c.unit_a].offsets[-1])
+                         for c in self.contacts)
+
     def acceleration_bound(self, unit: int) -> float:
         """A bound on |psi''| of a unit on the circle in a fixed plane: sum W_k / sum G_k (|sin| <= 1)."""
         _, weights, total = self._unit_floats[unit]
@@ -734,10 +742,7 @@ def _can_reach_end(scene: Scene, k: int, end: int) -> bool:
 def gap_value(system: SceneSystem, number: int, unit_state) -> float:
     """Gap of the number-th watched contact, in rad, from a unit state (in the state's number type)."""
     c = system.contacts[number]
-    a, b = c.unit_a, c.unit_b
-    with workprec():
-        constant = system.precision.number(c.pair.offset - c.pair.beta - system.units[a].offsets[-1])
-    return unit_state[b] - unit_state[a] + constant
+    return unit_state[c.unit_b] - unit_state[c.unit_a] + system.gap_constants[number]
 
 
 def unit_acceleration(system: SceneSystem, unit: int, psi: float) -> float:
