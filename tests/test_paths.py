@@ -582,3 +582,34 @@ def test_energy_surface_is_cut_above_the_potential_and_the_bodys_energy():
     assert top > problem.potential(q).max() and top > own  # every well, saddle and the body's own level shown
     assert top < H.max()  # the far corners cut off
     assert (H <= top).mean() > 0.3
+
+
+def test_path_branches_drawn_are_the_runs_trajectory_jumping_at_its_collisions():
+    # Issue 13: the path-track figures draw result.sample() (the dense output of the run itself);
+    # its pieces must meet the collision table: positions continuous through each collision,
+    # rates jumping from the table's 'before' to its 'after'.
+    disk = Body.of_shape("disk", "0.05", mass="1")
+    scene = Scene.make(CurveTrack.make("0.5*x**2*(x**2 - 1)**2 + 0.2*x**2", "-1.6", "1.6"), [disk, disk],
+                       ["-0.9", "0.4"], ["0", "0"], law=heyroll.make_law("hedrih", "0.9"), run=RunSettings.make(6))
+    result = heyroll.simulate(scene, dense=True)
+    table = result.collision_table()
+    assert result.status.value == "completed" and len(table) >= 3
+    n = len(scene.bodies)
+
+    def state_at(t):
+        for t0, t1, c_out, expand in result.dense:
+            if t0 <= t <= t1:
+                values = np.asarray(c_out(np.array([t])), dtype=float)[0]
+                return values if expand is None else np.array(expand(values.tolist()))
+        raise AssertionError(f"no dense piece covers t = {t}")
+
+    for row in table:
+        i, j, tc = row["i"] - 1, row["j"] - 1, float(row["t"])
+        before, after = state_at(tc - 1e-9), state_at(tc + 1e-9)
+        for k, side in ((i, "i"), (j, "j")):
+            assert before[k] == pytest.approx(row[f"q_{side}"], abs=1e-7)
+            assert after[k] == pytest.approx(row[f"q_{side}"], abs=1e-7)
+            assert before[n + k] == pytest.approx(row[f"dq_{side}_before"], abs=1e-6)
+            assert after[n + k] == pytest.approx(row[f"dq_{side}_after"], abs=1e-6)
+    t, X = result.sample(2000)
+    assert scene.gap(0, 1, X[:, 0], X[:, 1]).min() > -1e-9  # no drawn branch passes through the other body
