@@ -1,7 +1,9 @@
 """Collision table writers: the vectorised CSV text is "%.17g" exactly; the parquet table is the npy table."""
 
+import json
 import math
 import sys
+from pathlib import Path
 from fractions import Fraction
 
 import numpy as np
@@ -172,3 +174,25 @@ def test_binary_tables_refuse_other_precisions(table, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"heyroll: error: --table: {table} holds float64 columns: use csv for long, quad and MPFR runs"]
     assert not out.exists()
+
+
+def test_passages_are_streamed_to_passages_csv_and_only_the_first_chunk_kept(tmp_path):
+    # Issue 13: every table is streamed; junction passages and limiter impacts piled up in memory.
+    import heyroll
+    from heyroll.interfaces.outputs import write_run
+    from heyroll.interfaces.scene_file import load_scene
+
+    scene = load_scene(str(Path(__file__).resolve().parent.parent / "examples" / "arc_chain.toml"))
+    whole = heyroll.simulate(scene, t_end=20)
+    assert len(whole.passages) > 12
+    sink = table_sink(tmp_path, "csv")
+    streamed = heyroll.simulate(scene, t_end=20, sink=sink, chunk_size=5)
+    write_run(streamed, tmp_path, scene_source="arc_chain.toml", figures=False, sink=sink)
+    assert len(streamed.passages) == 5  # the first chunk, for figures
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    counts = whole.summary()
+    assert (summary["junction_passages"], summary["limiter_impacts"]) == (counts["junction_passages"],
+                                                                        counts["limiter_impacts"])
+    text = (tmp_path / "passages.csv").read_text()
+    assert text == collisions_csv(whole.passage_table())  # every passage, the same text as unstreamed
+    assert not list(tmp_path.glob(".*.tmp"))

@@ -17,7 +17,7 @@ import numpy as np
 
 from .._version import __version__
 from .csv_text import collisions_csv, csv_rows
-from ..simulation.result import INTEGER_COLUMNS, TABLE_COLUMNS, SimulationResult, build_collision_table
+from ..simulation.result import INTEGER_COLUMNS, PASSAGE_COLUMNS, TABLE_COLUMNS, SimulationResult, build_collision_table
 
 
 def versions() -> dict:
@@ -50,11 +50,24 @@ class _TableFile:
         self._tmp = self._final.with_name(f".{self._final.name}.tmp")
         self._file = None
         self.rows = 0
+        self._passages = None
+        self.passages_path = None  # set by open on an open track
+        self.passage_rows = 0
 
     def open(self, scene, pairs, precision) -> None:
         self.scene, self.pairs, self.precision = scene, pairs, precision
         self._file = open(self._tmp, "wb")
         self._start()
+        if scene.domain(0) is not None:  # an open track: passages.csv streamed beside the table
+            self.passages_path = str(self._final.with_name("passages.csv"))
+            self._passages_tmp = self._final.with_name(".passages.csv.tmp")
+            self._passages = open(self._passages_tmp, "wb")
+            self._passages.write((",".join(PASSAGE_COLUMNS) + "\n").encode())
+
+    def write_passages(self, table: np.ndarray) -> None:
+        """Junction passages and limiter impacts (``passage_table`` rows), appended to passages.csv."""
+        self._passages.write(csv_rows(table))
+        self.passage_rows += table.size
 
     def write(self, chunk: tuple, first_number: int) -> None:
         times, numbers, before, after, flags = chunk
@@ -72,6 +85,10 @@ class _TableFile:
         self._file.close()
         self._file = None
         os.replace(self._tmp, self._final)
+        if self._passages is not None:
+            self._passages.close()
+            self._passages = None
+            os.replace(self._passages_tmp, self.passages_path)
 
 
 class CsvTableSink(_TableFile):
@@ -205,11 +222,14 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
         sink = table_sink(out_dir, "csv")
         sink.open(result.scene, result.pairs, result.precision)
         sink.write((result.times, result.pair_numbers, result.states_before, result.states_after, result.law_flags), 1)
+        if sink.passages_path:
+            sink.write_passages(result.passage_table())
         sink.close()
     files = {"collisions": Path(sink.path).name, "summary": "summary.json"}
-    if result.scene.domain(0) is not None:  # an open track: junction passages and limiter impacts
-        passages = result.passage_table()
-        atomic_write_text(out_dir / "passages.csv", collisions_csv(passages))
+    if getattr(sink, "passages_path", None):  # an open track: junction passages and limiter impacts
+        files["passages"] = "passages.csv"
+    elif result.scene.domain(0) is not None:  # a sink of the caller's that does not take them
+        atomic_write_text(out_dir / "passages.csv", collisions_csv(result.passage_table()))
         files["passages"] = "passages.csv"
     if figures:
         from .figures import run_figures

@@ -29,7 +29,7 @@ from ..model.scene import Scene
 from .events import CollisionLog, StopRequest, mode_events, mode_handlers
 from .compiled_cache import CompiledCache
 from .precision import Precision
-from .result import SimulationResult, Status
+from .result import SimulationResult, Status, passage_table
 from .contact_function import BODY_VALUES, body_function, evaluate
 from .resolve.bounds import parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
@@ -214,6 +214,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
     elif progress is not None:
         log.chunk_size = 1024
     log.on_full = stream.on_full
+    if hasattr(sink, "write_passages"):  # junction passages and limiter impacts streamed too
+        log.on_passages_full = stream.flush_passages
 
     num = precision.number
     start = _start(scene, precision, pairs)
@@ -347,6 +349,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
     total = log.count
     if sink is not None:
         stream.flush()
+        stream.flush_passages()
         sink.close()
         kept = stream.kept or records_to_arrays([], len(scene.bodies))
     else:
@@ -382,7 +385,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
             "track_sides": scene.track_sides,
             "warnings": [log.warnings[k] for k in sorted(log.warnings)],
         },
-        passages=tuple(log.passages),
+        passages=tuple(log.passages) if stream.kept_passages is None else stream.kept_passages,
+        passage_counts=(log.n_passages - log.limiter_impacts, log.limiter_impacts),
         dense=tuple(dense) if dense is not None else None,
         total_collisions=total,
         table_file=getattr(sink, "path", None) if sink is not None else None,
@@ -648,6 +652,7 @@ class _Stream:
     def __init__(self, log, sink, progress, n_bodies):
         self.log, self.sink, self.progress, self.n_bodies = log, sink, progress, n_bodies
         self.kept: tuple | None = None  # the first chunk stays in memory for figures
+        self.kept_passages: tuple | None = None  # the same for passages, if the sink takes them
         self.last_report = time.perf_counter()
         self.ta = None
 
@@ -669,6 +674,19 @@ class _Stream:
                     self._taken(chunk)
                 raise
             self._taken(chunk)
+
+    def flush_passages(self) -> None:
+        """Hand the passages on to the sink (``write_passages``), keeping the first chunk in memory."""
+        log = self.log
+        if not log.passages or not hasattr(self.sink, "write_passages"):
+            return
+        table = passage_table(log.passages, first_number=log.passages_flushed + 1)
+        with _signals_deferred():  # as for collisions: a chunk is written once
+            self.sink.write_passages(table)
+            if self.kept_passages is None:
+                self.kept_passages = tuple(log.passages)
+            log.passages_flushed += len(log.passages)
+            log.passages.clear()
 
     def _taken(self, chunk) -> None:
         log = self.log

@@ -84,14 +84,32 @@ class CollisionLog:
     #: The bound on every kind of event together (RunOptions.max_events), and the mode changes so far.
     max_events: int | None = None
     mode_changes: int = 0
+    #: Passages handed on to a sink (``on_passages_full`` takes a full chunk), and the limiter
+    #: impacts among all passages so far.
+    passages_flushed: int = 0
+    limiter_impacts: int = 0
+    on_passages_full: object = None
+
+    def record_passage(self, row: tuple) -> bool:
+        """Keep a passage (see ``passages``); False: max_events is reached, the run stops."""
+        self.passages.append(row)
+        if row[2] != 0:
+            self.limiter_impacts += 1
+        if self.on_passages_full is not None and len(self.passages) >= self.chunk_size:
+            self.on_passages_full()
+        return not self.events_exhausted()
+
+    @property
+    def n_passages(self) -> int:
+        return self.passages_flushed + len(self.passages)
 
     def events_exhausted(self) -> bool:
         """Whether collisions, passages and mode changes together reached max_events (sets the stop)."""
-        if self.max_events is None or self.count + len(self.passages) + self.mode_changes < self.max_events:
+        if self.max_events is None or self.count + self.n_passages + self.mode_changes < self.max_events:
             return False
         self.stop.reason = "max_events"
         self.stop.message = (f"stopped after max_events = {self.max_events} events ({self.count} collisions, "
-                             f"{len(self.passages)} junction passages and limiter impacts, {self.mode_changes} "
+                             f"{self.n_passages} junction passages and limiter impacts, {self.mode_changes} "
                              "contact mode changes); raise it with --max-events N (RunOptions.max_events)")
         return True
 

@@ -242,8 +242,11 @@ class SimulationResult:
     contact_intervals: tuple = ()
     #: Mode changes (ModeChange: t, clusters, full state), the first at t = 0.
     mode_changes: tuple = ()
-    #: Junction passages and limiter impacts (see events.CollisionLog.passages and passage_table).
+    #: Junction passages and limiter impacts (see events.CollisionLog.passages and passage_table);
+    #: a run streamed to a sink that takes them keeps only the first chunk here (the file has them all).
     passages: tuple = ()
+    #: (junction passages, limiter impacts) in the whole run (streamed ones included).
+    passage_counts: tuple | None = None
     #: With RunOptions(dense=True): (t0, t1, heyoka continuous output) per propagation.
     dense: tuple | None = None
 
@@ -340,12 +343,13 @@ class SimulationResult:
         final = np.asarray(self.final_state, dtype=float)
         c = self.scene.coordinate
         kinds = [row[2] for row in self.passages]
+        junctions, impacts = self.passage_counts or (sum(1 for x in kinds if x == 0), sum(1 for x in kinds if x != 0))
         return {
             "status": self.status.value,
             "message": self.message,
             "collisions": self.n_collisions,
-            "limiter_impacts": sum(1 for x in kinds if x != 0),
-            "junction_passages": sum(1 for x in kinds if x == 0),
+            "limiter_impacts": impacts,
+            "junction_passages": junctions,
             "t_final": float(self.t_final),
             "energy_initial": self.energy_initial,
             "energy_final": self.energy_final,
@@ -367,11 +371,12 @@ class SimulationResult:
         }
 
 
-def passage_table(passages) -> np.ndarray:
-    """Passage records -> structured array (columns PASSAGE_COLUMNS; kind 0 junction, 1/2 lower/upper limiter)."""
+def passage_table(passages, first_number: int = 1) -> np.ndarray:
+    """Passage records -> structured array (columns PASSAGE_COLUMNS; kind 0 junction, 1/2 lower/upper limiter),
+    numbered from ``first_number``."""
     dtype = [(c, np.int64 if c in ("n", "body", "kind", "piece_from", "piece_to") else np.float64)
              for c in PASSAGE_COLUMNS]
     table = np.zeros(len(passages), dtype=dtype)
     for n, (t, body, kind, p_from, p_to, q, v, v_new) in enumerate(passages):
-        table[n] = (n + 1, float(t), body + 1, kind, p_from + 1, p_to + 1, float(q), float(v), float(v_new))
+        table[n] = (first_number + n, float(t), body + 1, kind, p_from + 1, p_to + 1, float(q), float(v), float(v_new))
     return table

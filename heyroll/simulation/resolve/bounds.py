@@ -82,13 +82,11 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
             pars[block.first:block.first + len(values[new])] = values[new]
             kept = ta.pars  # heyoka keeps the parameters up to the last one its equations and events use
             kept[:] = pars[: len(kept)]
-            log.passages.append((t, k, 0, piece, new, q, v, v))
-            return not log.events_exhausted()
+            return log.record_passage((t, k, 0, piece, new, q, v, v))
         v_new = -k_lim * v
         s[nu + u] = v_new
         s[u] = q - margin if upper else q + margin
-        log.passages.append((t, k, 2 if upper else 1, piece, piece, q, v, v_new))
-        if log.events_exhausted():
+        if not log.record_passage((t, k, 2 if upper else 1, piece, piece, q, v, v_new)):
             return False
         # Resting on the stop: the rebounds left are below the run's resolution
         # while the track pushes the body onto it (as for a pair, events.below_resolution).

@@ -1,0 +1,150 @@
+"""KEY paths: which numeric scene field a sweep varies, named as in the scene file.
+
+``collision.restitution``, ``bodies[2].mass``, ``frame.omega``, ``g``,
+``track.segments[3].radius``: a table (or an array of tables with a 1-based
+index, bodies numbered 1..N as everywhere) and a field. A KEY is checked
+against the scene file's own key sets (heyroll.interfaces.scene_file), so it
+names exactly the fields a scene file may hold; a point's value is written
+into a copy of the parsed TOML and the scene is built by the normal loader,
+so every point gets the normal validation (issue 16).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from ..interfaces import scene_file as sf
+from .errors import SweepKeyError
+
+#: Scene-file fields that hold text or tables, never a number.
+NOT_NUMERIC = {"name", "type", "sides", "y", "kind", "side", "shape", "law", "on_inconsistent", "segments", "sweep"}
+#: Numeric fields that take whole numbers only.
+WHOLE_NUMBERS = {"segment", "max_collisions"}
+#: Two ways of giving one quantity: a point that sets one drops the other from its copy of the
+#: scene (varying ``bodies[1].mass`` of a body given by density gives it that mass).
+ALTERNATIVES = {"mass": "density", "density": "mass", "dphi": "omega", "omega": "dphi"}
+
+_PART = re.compile(r"([A-Za-z_]+)(?:\[(\d+)\])?$")
+
+
+@dataclass(frozen=True)
+class Key:
+    """A parsed KEY: ``path`` is ((name, index or None), ...), the index 1-based."""
+
+    text: str
+    path: tuple
+
+    @property
+    def field(self) -> str:
+        """The last name: ``mass`` for ``bodies[2].mass``."""
+        return self.path[-1][0]
+
+    @property
+    def whole(self) -> bool:
+        return self.field in WHOLE_NUMBERS
+
+
+def parse_key(text: str, data: dict) -> Key:
+    """Check ``text`` against the parsed scene ``data``; raise SweepKeyError naming it if it is no numeric field."""
+    if not isinstance(text, str) or not text.strip():
+        raise SweepKeyError(str(text), "an empty KEY: name a numeric scene field, e.g. collision.restitution")
+    text = text.strip()
+    parts = []
+    for part in text.split("."):
+        match = _PART.match(part)
+        if match is None:
+            raise SweepKeyError(text, f"not a KEY (table.field, bodies[N].field): bad part {part!r}")
+        parts.append((match.group(1), None if match.group(2) is None else int(match.group(2))))
+    key = Key(text, tuple(parts))
+    _check(key, data)
+    return key
+
+
+def _check(key: Key, data: dict) -> None:
+    track = data.get("track") if isinstance(data.get("track"), dict) else {}
+    kind = track.get("type", "circle")
+    path = key.path
+
+    def unknown(rule: str):
+        raise SweepKeyError(key.text, f"unknown sweep key: {rule}")
+
+    def numeric(name: str, allowed: set, where: str):
+        if name not in allowed or name in NOT_NUMERIC:
+            numbers = sorted(k for k in allowed if k not in NOT_NUMERIC)
+            unknown(f"{where} has no numeric field {name!r}; numeric fields there: {', '.join(numbers)}")
+
+    head, index = path[0]
+    if head == "bodies":
+        if index is None or len(path) != 2:
+            unknown("name a body and a field, e.g. bodies[1].mass (bodies numbered from 1)")
+        bodies = data.get("bodies") if isinstance(data.get("bodies"), list) else []
+        if not 1 <= index <= len(bodies):
+            unknown(f"the scene has {len(bodies)} bodies, numbered 1..{len(bodies)}")
+        allowed = (sf.BODY_KEYS if kind not in sf.PATH_TRACK_KEYS
+                   else sf.PATH_BODY_KEYS["curve" if kind == "curve" else "arcs"])  # three_arcs: as arcs
+        numeric(path[1][0], allowed, f"bodies[{index}] on a {kind} track")
+        if path[1][1] is not None:
+            unknown(f"{path[1][0]} is not an array")
+        return
+    if index is not None:
+        unknown(f"{head} is not an array of tables")
+    if len(path) == 1:
+        numeric(head, sf.TOP_KEYS, "the top level")
+        return
+    if head == "track" and path[1][0] == "segments":
+        segments = track.get("segments") if isinstance(track.get("segments"), list) else []
+        n = path[1][1]
+        if kind != "arcs" or n is None or len(path) != 3:
+            unknown("track.segments[N].field needs an arcs track and a segment number")
+        if not 1 <= n <= len(segments) or not isinstance(segments[n - 1], dict):
+            unknown(f"the track has {len(segments)} segments, numbered 1..{len(segments)}")
+        seg_kind = segments[n - 1].get("kind")
+        numeric(path[2][0], sf.SEGMENT_KEYS.get(seg_kind, set()), f"track.segments[{n}] ({seg_kind})")
+        return
+    tables = {
+        "track": sf.PATH_TRACK_KEYS.get(kind, sf.TRACK_KEYS),
+        "frame": sf.FRAME_KEYS,
+        "collision": sf.COLLISION_KEYS,
+        "run": sf.RUN_KEYS,
+    }
+    if head not in tables or len(path) != 2:
+        unknown(f"no table {head!r} with numeric fields; tables: {', '.join(tables)}, bodies[N], and g")
+    if path[1][1] is not None:
+        unknown(f"{path[1][0]} is not an array")
+    numeric(path[1][0], tables[head], f"[{head}]")
+
+
+def apply(data: dict, key: Key, value) -> None:
+    """Write ``value`` at ``key`` in ``data`` (a point's own copy of the parsed TOML), creating a missing table."""
+    node = data
+    for name, index in key.path[:-1]:
+        if index is None:
+            node = node.setdefault(name, {})
+        else:
+            node = node[name][index - 1]
+    field = key.field
+    node[field] = value
+    other = ALTERNATIVES.get(field)
+    if other is not None and key.path[0][0] == "bodies":
+        node.pop(other, None)
+
+
+#: SI units of each numeric field, by its name ('' for a pure number).
+_UNITS = {
+    "g": "m/s²", "radius": "m", "hump_radius": "m", "mass": "kg", "friction": "", "restitution": "",
+    "limiter_restitution": "", "kappa": "", "beta": "rad", "axis_x": "m", "start_x": "m", "start_y": "m",
+    "x_min": "m", "x_max": "m", "x": "m", "dx": "m/s", "s": "m", "ds": "m/s", "phi": "rad", "dphi": "rad/s",
+    "angle": "rad", "dangle": "rad/s", "length": "m", "start": "rad", "end": "rad", "t_end": "s",
+    "max_collisions": "", "segment": "",
+    "omega": "rad/s",  # the frame's rotation or a body's rolling angular velocity
+}
+#: A body's density is per volume, area or length, by its shape (README, "Bodies").
+_DENSITY = {"solid_sphere": "kg/m³", "hollow_sphere": "kg/m²", "disk": "kg/m²", "ring": "kg/m"}
+
+
+def units(key: Key, data: dict) -> str:
+    """SI units of ``key`` in the scene ``data`` (a density's follow the body's shape)."""
+    if key.field == "density":
+        return _DENSITY.get(data["bodies"][key.path[0][1] - 1].get("shape"), "")
+    return _UNITS.get(key.field, "")

@@ -1,0 +1,178 @@
+"""The sweep's store: one xarray Dataset in DIR/sweep.zarr (Zarr format 3), written chunk by chunk.
+
+Layout (README, "Sweeps"): one dimension per varied KEY, named by the KEY,
+its values as the coordinate (a random sample: a ``point`` dimension with the
+sampled values as coordinates along it); per point ``status``, ``message``,
+``collisions``, ``t_final``, ``energy_initial``, ``energy_final``,
+``final_state`` (dimension ``state``: phi1..phiN, dphi1..dphiN), and with
+--keep impacts:M the last M impacts as ``impact_*`` variables with a trailing
+``impact`` dimension of length M (padded: NaN, and 0 for the body and
+collision numbers, where a point had fewer than M collisions). Attributes:
+the sweep's spec (``heyroll_sweep_spec``, JSON), versions, the base scene's
+text and source, the command.
+
+Why a kill never corrupts it: the store is created complete (every variable
+at its fill value, the coordinates written) under a temporary name and renamed
+into place; a chunk of points is written as region writes aligned to the Zarr
+chunks, whose files the local store replaces atomically, ``status`` last. A
+point is stored when its status is not '': a chunk interrupted before its
+status write is run again, and its rewrite gives the same bytes.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SweepStoreError
+from .plan import SweepPlan
+from .points import IMPACT_COLUMNS, empty_columns
+
+STORE_NAME = "sweep.zarr"
+SPEC_ATTR = "heyroll_sweep_spec"
+#: Temporary files of the Zarr local store's atomic writes (``<name>.<uuid hex>.partial``): what a
+#: SIGKILL in the middle of a chunk write leaves behind.
+_PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
+
+#: Descriptions and units of the per-point variables ('{q}' is the track's coordinate unit).
+VARIABLES = {
+    "status": ("how the point's run ended: a heyroll status, invalid_scene (the loader refused the scene), "
+               "error (the run raised); '' not run yet", ""),
+    "message": ("the run's message, or the SceneError of an invalid scene", ""),
+    "collisions": ("collisions in the run (-1: not run)", ""),
+    "t_final": ("time where the run stopped", "s"),
+    "energy_initial": ("total mechanical energy (first integral on a turning plane) at t = 0", "J"),
+    "energy_final": ("total mechanical energy at t_final", "J"),
+    "final_state": ("state at t_final: coordinates, then their rates", ""),
+    "impact_n": ("collision number within the run (0: empty slot)", ""),
+    "impact_t": ("collision time", "s"),
+    "impact_i": ("body before the contact, from 1 (0: empty slot)", ""),
+    "impact_j": ("body after the contact, from 1 (0: empty slot)", ""),
+    "impact_q_i": ("coordinate of body i at the collision", "{q}"),
+    "impact_q_j": ("coordinate of body j at the collision", "{q}"),
+    "impact_dq_i_before": ("rate of body i before the collision", "{q}/s"),
+    "impact_dq_j_before": ("rate of body j before the collision", "{q}/s"),
+    "impact_dq_i_after": ("rate of body i after the collision", "{q}/s"),
+    "impact_dq_j_after": ("rate of body j after the collision", "{q}/s"),
+}
+COORDINATE_UNITS = {"phi": "rad", "s": "m", "x": "m"}
+
+
+def store_path(out_dir: Path) -> Path:
+    return Path(out_dir) / STORE_NAME
+
+
+def template(plan: SweepPlan, attrs: dict):
+    """The whole store as an xarray Dataset with every point not run yet (its fill values)."""
+    import xarray as xr
+
+    dims, shape = plan.dims, plan.shape
+    columns = empty_columns(plan.n_points, plan.n_bodies, plan.keep)
+    q = plan.coordinate
+    unit = COORDINATE_UNITS.get(q, "")
+    variables = {}
+    for name, column in columns.items():
+        extra = {"final_state": ("state",)}.get(name, ("impact",) if name.startswith("impact_") else ())
+        description, units = VARIABLES[name]
+        variables[name] = (dims + extra, column.reshape(shape + column.shape[1:]),
+                           {"description": description, "units": units.format(q=unit)} if units else
+                           {"description": description})
+    n = plan.n_bodies
+    coords = {"state": ("state", np.array([f"{q}{k}" for k in range(1, n + 1)] + [f"d{q}{k}" for k in range(1, n + 1)],
+                                          dtype=object))}
+    if plan.sample is not None:
+        coords["point"] = ("point", np.arange(plan.n_points))
+        for key, values in zip(plan.keys, plan.sample.values):
+            coords[key.text] = ("point", np.array([float(v) for v in values]), _key_attrs(plan, key))
+    else:
+        for axis in plan.axes:
+            dtype = np.int64 if axis.key.whole else float
+            coords[axis.key.text] = (axis.key.text, np.array([dtype(v) for v in axis.values]), _key_attrs(plan, axis.key))
+    if plan.keep:
+        coords["impact"] = ("impact", np.arange(plan.keep))
+    return xr.Dataset(variables, coords=coords, attrs=attrs)
+
+
+def _key_attrs(plan: SweepPlan, key) -> dict:
+    units = plan.units(key)
+    return {"long_name": key.text, **({"units": units} if units else {})}
+
+
+def open_or_create(plan: SweepPlan, out_dir: Path, attrs: dict) -> Path:
+    """The store of ``plan`` in ``out_dir``: created, or an existing one of the same spec (else SweepStoreError)."""
+    path = store_path(out_dir)
+    if path.exists():
+        check_spec(path, plan, attrs["versions"])
+        for partial in path.rglob("*.partial"):
+            if _PARTIAL.search(partial.name):
+                partial.unlink()
+        return path
+    ds = template(plan, attrs)
+    chunks = plan.chunks
+    encoding = {name: {"chunks": chunks + ds[name].shape[len(chunks):]} for name in ds.data_vars}
+    tmp = path.with_name(f".{path.name}.partial")
+    if tmp.exists():  # a creation that was killed: it never was the store
+        shutil.rmtree(tmp)
+    ds.to_zarr(tmp, mode="w-", encoding=encoding, consolidated=False, zarr_format=3)
+    tmp.rename(path)
+    return path
+
+
+def check_spec(path: Path, plan: SweepPlan, versions: dict) -> None:
+    """Refuse a store that is not this sweep's (one line naming what differs); nothing is written."""
+    import zarr
+
+    try:
+        stored = dict(zarr.open_group(str(path), mode="r").attrs)
+    except Exception as exc:  # not a Zarr group at all: whatever zarr raises, the answer is the same
+        raise SweepStoreError("--out", f"{path} exists and is not a heyroll sweep store ({exc.__class__.__name__}): "
+                              "use another --out or remove it") from None
+    if SPEC_ATTR not in stored:
+        raise SweepStoreError("--out", f"{path} exists and is not a heyroll sweep store: use another --out or remove it")
+    old, new = json.loads(stored[SPEC_ATTR]), json.loads(json.dumps(plan.spec()))
+    if old != new:
+        what = ", ".join(k for k in new if old.get(k) != new.get(k)) or "format"
+        raise SweepStoreError("--out", f"{path} belongs to a different sweep ({what} differ): "
+                              "use another --out, or remove it to start again")
+    if stored.get("versions") != versions:
+        raise SweepStoreError("--out", f"{path} was written with other versions ({stored.get('versions')}): "
+                              "resume it with those, or remove it to start again")
+
+
+def stored_mask(path: Path) -> np.ndarray:
+    """Which points are stored (flat, C order): their status is not ''."""
+    import zarr
+
+    status = zarr.open_array(str(path / "status"), mode="r")[...]
+    return np.asarray(status, dtype=object).reshape(-1) != ""
+
+
+def write_chunk(path: Path, plan: SweepPlan, region: dict, columns: dict) -> None:
+    """Write one chunk's columns (rows in C order over ``region``) as region writes, ``status`` last."""
+    import xarray as xr
+
+    shape = tuple(s.stop - s.start for s in region.values())
+    dims = plan.dims
+    variables = {}
+    for name, column in columns.items():
+        extra = {"final_state": ("state",)}.get(name, ("impact",) if name.startswith("impact_") else ())
+        variables[name] = (dims + extra, column.reshape(shape + column.shape[1:]))
+    ds = xr.Dataset(variables)
+    data = [name for name in ds.data_vars if name != "status"]
+    ds[data].to_zarr(path, region=region, mode="r+", consolidated=False)
+    ds[["status"]].to_zarr(path, region=region, mode="r+", consolidated=False)
+
+
+def open_sweep(path) -> "xr.Dataset":
+    """A sweep store as an xarray Dataset, loaded into memory."""
+    import xarray as xr
+
+    with xr.open_zarr(path, consolidated=False, chunks=None) as ds:
+        return ds.load()
+
+
+__all__ = ["IMPACT_COLUMNS", "STORE_NAME", "open_or_create", "open_sweep", "stored_mask", "write_chunk"]
