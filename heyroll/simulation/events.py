@@ -777,15 +777,10 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                 return moved
         return moved
 
-    # Every contact's two units and gap constant as arrays: one numpy pass finds the pairs that
-    # touch anywhere (two disjoint pairs of a symmetric scene collide at one instant; the other
-    # pair's event cannot fire from a gap of exactly 0 at the restart: measured, status overlap).
-    where_a = np.array([g[0] for g in geometry], dtype=np.int64)
-    where_b = np.array([g[1] for g in geometry], dtype=np.int64)
-    constants = [g[2] for g in geometry]
-    typed: dict = {}
-
     ulp = system.precision.number(eps)
+    # below_resolution can only hold if v^2 <= 2 A h_res or v <= A (1 - k) t_res / 2, with A a
+    # bound on the gap's acceleration: most pairs are cleared without computing it (as on_collision).
+    bounds = [system.acceleration_bound(a) + system.acceleration_bound(b) for a, b, _ in geometry]
 
     def lift_gap(s, number):
         """A gap just below zero (rounding) to >= 0 by the least move of its second unit."""
@@ -795,14 +790,18 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
             s[b] = s[b] - g + ulp * (1 + abs(s[b]))
 
     def touching_elsewhere(s) -> list:
-        c = typed.get(s.dtype)
-        if c is None:
-            c = typed[s.dtype] = np.array(constants, dtype=s.dtype)
-        pa, pb = s[where_a], s[where_b]
-        gap = (pb - pa + c).astype(float)  # computed in the run's type; compared as doubles (~1e-32 is fine)
-        scale = 1 + np.abs(pa.astype(float)) + np.abs(pb.astype(float))
-        near = np.abs(gap) <= RESOLUTION_ULPS * eps * scale
-        return [int(u) for n in np.flatnonzero(near) for u in (where_a[n], where_b[n])]
+        """The units of every pair touching anywhere: two disjoint pairs of a symmetric scene collide
+        at one instant, and the other pair's event cannot fire from a gap of exactly 0 at the
+        restart (measured: status overlap). One pass over the positions, in the run's own type
+        (Python floats for double: 4x faster than numpy's small-array operations at 8 bodies)."""
+        x = s.tolist() if s.dtype == np.float64 else list(s)
+        band = RESOLUTION_ULPS * eps
+        out = []
+        for a, b, constant in geometry:
+            pa, pb = x[a], x[b]
+            if abs(pb - pa + constant) <= band * (1 + abs(pa) + abs(pb)):
+                out += (a, b)
+        return out
 
     def settle(s, t, units, skip_open=None, skip_merge=()) -> bool:
         # Impulses first (positions frozen: every collision of the instant sees
@@ -811,6 +810,7 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
         if len(geometry) > 2 and len(units) <= 2:  # after a collision (the mode's start looks at every unit)
             pending += [u for u in touching_elsewhere(s) if u not in units]
         seen = set(pending)
+        judged = {skip_open}  # the contact whose event fired is judged by its own callback
         rounds = 0
         while pending:
             unit = pending.pop()
@@ -829,14 +829,20 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                     rounds += 1
                     if not resolvers[number](s, t):
                         return False
+                    judged.discard(number)
                     pending += [a, b]
                     seen.update((a, b))
                     continue
-                if number not in skip_merge:
+                if number not in skip_merge and number not in judged:
+                    judged.add(number)  # (until a collision of its own at this instant: see above)
                     pa, pb, va, vb = float(pa), float(pb), float(va), float(vb)
+                    v, bound, scale = max(vb - va, 0.0), bounds[number], float(scale)
+                    if v * v > 2 * bound * RESOLUTION_ULPS * eps * scale and \
+                            v > bound * (1 - k) * RESOLUTION_ULPS * eps * (abs(float(t)) + time_scale) / 2:
+                        continue
                     acc = unit_acceleration(system, b, pb) - unit_acceleration(system, a, pa)
                     jerk = unit_jerk(system, b, pb, vb) - unit_jerk(system, a, pa, va)
-                    if below_resolution(max(vb - va, 0.0), acc, k, float(t), float(scale), time_scale, eps, jerk):
+                    if below_resolution(v, acc, k, float(t), scale, time_scale, eps, jerk):
                         stop.reason, stop.data = "merge", {"contact": number}
                         return False
         for number in sorted({n for unit in seen for n in by_unit.get(unit, ())}):
