@@ -57,7 +57,7 @@ print(result.n_collisions, time.perf_counter() - t0)
 def baseline_rate(worktree: Path, t_end: float) -> float:
     """Collisions/s (table built) of the baseline revision, in a subprocess that imports it from ``worktree``."""
     env = dict(os.environ, PYTHONPATH=str(worktree))
-    out = subprocess.run([sys.executable, "-c", BASELINE_RUN, repr(t_end)], env=env, check=True,
+    out = subprocess.run([sys.executable, "-c", BASELINE_RUN, repr(t_end)], env=env, check=True, cwd=worktree,
                          capture_output=True, text=True).stdout.split()
     return int(out[0]) / float(out[1])
 

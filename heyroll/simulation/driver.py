@@ -247,8 +247,9 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale, pieces)
         cooldown = precision.number(precision.epsilon * time_scale)
         # The first mode is compiled optimized; a later one (a cluster forming or splitting,
-        # a body coming to rest), unless compiled before, quickly first (see QUICK_STEPS).
-        quick = later_mode and not _compiled(system, options, cooldown)
+        # a body coming to rest) quickly first (see QUICK_STEPS), also when the optimized one is
+        # cached already: the two round differently, and a run must not depend on what ran before.
+        quick = later_mode
         ta, slots, nt_slots = _integrator(system, options, cooldown, quick=quick)
         slots[:], nt_slots[:] = handlers, warnings
         params = parameters_on_pieces(scene, system, pieces) if system.piece_blocks else list(system.parameters)
@@ -789,8 +790,10 @@ _INTEGRATORS = CompiledCache(32)
 #: 15.5 s for 32, about a minute for 64) and compact mode stays under a second, for
 #: 1.4-1.8x the cost per step (measured with the same systems: 79 against 45 us for 8 bodies,
 #: 1.75 against 1.23 ms for 32, per 2 s of motion). validation/many_bodies.py has the
-#: resulting cost per collision and compile time against N.
-COMPACT_FROM_BODIES = 12
+#: resulting cost per collision and compile time against N. Up to 16 bodies the default
+#: mode's compilation (3.8 s for 16, once per scene shape; heyoka also keeps it on disk)
+#: is worth its faster steps on runs of many collisions.
+COMPACT_FROM_BODIES = 17
 
 
 def _compact(system: SceneSystem) -> bool:
@@ -831,11 +834,6 @@ def _optimized_successor(system: SceneSystem, options: dict, cooldown, handlers,
         return new
 
     return optimized
-
-
-def _compiled(system: SceneSystem, options: dict, cooldown) -> bool:
-    """Whether the optimized integrator of ``system``'s shape is compiled already."""
-    return _integrator_key(system, options, cooldown, False) in _INTEGRATORS
 
 
 def _integrator(system: SceneSystem, options: dict, cooldown, quick: bool = False):

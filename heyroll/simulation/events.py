@@ -810,7 +810,7 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
         if len(geometry) > 2 and len(units) <= 2:  # after a collision (the mode's start looks at every unit)
             pending += [u for u in touching_elsewhere(s) if u not in units]
         seen = set(pending)
-        judged = {skip_open}  # the contact whose event fired is judged by its own callback
+        judged: set = set()  # contacts found not pressed at this instant (see below)
         rounds = 0
         while pending:
             unit = pending.pop()
@@ -829,12 +829,12 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                     rounds += 1
                     if not resolvers[number](s, t):
                         return False
-                    judged.discard(number)
+                    judged.difference_update(by_unit[a], by_unit[b])  # their rates changed: judge again
                     pending += [a, b]
                     seen.update((a, b))
                     continue
                 if number not in skip_merge and number not in judged:
-                    judged.add(number)  # (until a collision of its own at this instant: see above)
+                    judged.add(number)  # (until a collision of one of its units at this instant: see above)
                     pa, pb, va, vb = float(pa), float(pb), float(va), float(vb)
                     v, bound, scale = max(vb - va, 0.0), bounds[number], float(scale)
                     if v * v > 2 * bound * RESOLUTION_ULPS * eps * scale and \
