@@ -2,6 +2,7 @@
 
 import mpmath
 import pytest
+from pathlib import Path
 
 import heyroll
 from heyroll import SceneError, SceneFileError, parse_scene
@@ -163,3 +164,30 @@ def test_a_segment_kind_that_is_not_a_string_is_one_line(tmp_path, capsys):
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["heyroll: error: track.segments[1].kind: must be arc or line, got [1, 2]"]
+
+
+@pytest.mark.parametrize("name", ["arc_chain.toml", "disk_and_ring.toml", "rotating_curve.toml"])
+def test_a_pickled_scene_keeps_its_exact_numbers(name):
+    # mpmath unpickles an mpf at the receiving process's precision (53 bits): a scene sent to a
+    # worker process ran with its 256-bit constants rounded to doubles. Scene.__reduce__ ships them exactly.
+    import dataclasses
+    import pickle
+
+    import mpmath
+
+    from heyroll.interfaces.scene_file import load_scene
+
+    scene = load_scene(str(Path(__file__).resolve().parent.parent / "examples" / name))
+    copy = pickle.loads(pickle.dumps(scene))
+    assert copy == scene
+
+    def mantissas(value):
+        if isinstance(value, mpmath.mpf):
+            return [value._mpf_]
+        if dataclasses.is_dataclass(value):
+            return [m for f in dataclasses.fields(value) for m in mantissas(getattr(value, f.name))]
+        if isinstance(value, (tuple, list)):
+            return [m for v in value for m in mantissas(v)]
+        return []
+
+    assert mantissas(copy) == mantissas(scene) and max(m[3] for m in mantissas(scene)) > 53

@@ -7,6 +7,7 @@ evaluated at that precision and rounded once to the working type of a run.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from decimal import Decimal
 from fractions import Fraction
@@ -77,3 +78,41 @@ def is_number(value) -> bool:
 def is_positive_double(value: Real) -> bool:
     """True when ``value`` rounds to a positive double (not 0 by underflow)."""
     return float(value) > 0
+
+
+# -- pickling without rounding -------------------------------------------------------------
+# mpmath pickles an mpf by its digits and rebuilds it at the unpickling process's precision
+# (53 bits by default): a Scene sent to another process (multiprocessing, Dask) came back with
+# its 256-bit constants rounded to doubles, and ran differently (measured: an 8-body scene
+# that fails in one process completed from its pickle). Scene.__reduce__ ships exact mantissas.
+
+
+def exact_state(value):
+    """``value`` with every mpf replaced by its exact (sign, mantissa, exponent, bits) tuple,
+    recursively through frozen dataclasses, tuples and lists (see :func:`from_exact_state`)."""
+    if isinstance(value, mpmath.mpf):
+        return (_MPF, value._mpf_)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return (_DATACLASS, type(value), tuple((f.name, exact_state(getattr(value, f.name)))
+                                               for f in dataclasses.fields(value)))
+    if isinstance(value, (tuple, list)):
+        return (_SEQUENCE, type(value), tuple(exact_state(v) for v in value))
+    return (_PLAIN, value)
+
+
+def from_exact_state(state):
+    """The object :func:`exact_state` took apart (dataclasses rebuilt without re-validation)."""
+    kind = state[0]
+    if kind == _MPF:
+        return mpmath.mp.make_mpf(state[1])
+    if kind == _DATACLASS:
+        obj = object.__new__(state[1])
+        for name, field_state in state[2]:
+            object.__setattr__(obj, name, from_exact_state(field_state))
+        return obj
+    if kind == _SEQUENCE:
+        return state[1](from_exact_state(v) for v in state[2])
+    return state[1]
+
+
+_MPF, _DATACLASS, _SEQUENCE, _PLAIN = range(4)

@@ -18,7 +18,7 @@ import mpmath
 import numpy as np
 
 from ..errors import SceneError
-from ._numbers import Real, is_finite, to_mpf, workprec
+from ._numbers import Real, exact_state, from_exact_state, is_finite, to_mpf, workprec
 from .bodies import Body
 from .frame import STATIONARY, Frame
 from .laws import CollisionLaw, HedrihRollingLaw, ImpulseMap, conserves_mechanical_energy_bound, impulse_map
@@ -92,6 +92,9 @@ class Scene:
     hash of its exact numbers is computed once (hashing every mpf of a scene took
     ~0.1 ms of each run's set-up, measured).
     """
+
+    def __reduce__(self):
+        return (from_exact_state, (exact_state(self),))  # mpf values exactly (see _numbers)
 
     def __hash__(self) -> int:
         cached = self.__dict__.get("_hash")
