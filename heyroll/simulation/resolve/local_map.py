@@ -157,14 +157,20 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         # contact by a bounce), then judge with the gap's actual acceleration and jerk.
         acc0, gi, gj, si, sj, vi0, vj0 = seen
         vi, vj = s[nu + a], s[nu + b]
-        opening = float(gi * vi + gj * vj)  # positions do not change in a collision: nor the gradient
+        # Positions do not change in a collision: nor the gradient. The paper's law acts on the
+        # speeds along the track; where the track curves between the two contact points its
+        # opening is not -k times the closing (measured: 9.4e-7 m/s after every plastic collision
+        # of two bodies on a curve, 10,000 bounces of 4 us that never die out, then a missed
+        # one). The bounces judged are the law's own, each k times the one before.
+        bounce = k * abs(float(gi) * vi0 + float(gj) * vj0)
+        opening = min(float(gi * vi + gj * vj), bounce)
         vi, vj = float(vi), float(vj)
         bound = 8 * (abs(acc0) + (vi0 * vi0 + vj0 * vj0 + vi * vi + vj * vj) * (si * si + sj * sj) / curvature_scale)
         scale = 1 + abs(float(s[a])) + abs(float(s[b]))
         if opening * opening > bound * h_bound * scale and opening > bound * t_bound * (abs(float(t)) + time_scale):
             return close_collision(log, number, False)
         _gap, gi, gj, _si, _sj, acc, jerk = values(s, pars)
-        opening = float(gi * s[nu + a] + gj * s[nu + b])
+        opening = min(float(gi * s[nu + a] + gj * s[nu + b]), bounce)
         return close_collision(log, number,
                                below_resolution(opening, float(acc), k, float(t), scale, time_scale, eps, float(jerk)))
 
