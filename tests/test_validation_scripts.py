@@ -12,6 +12,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import heyroll
 
 VALIDATION = Path(__file__).resolve().parents[1] / "validation"
@@ -59,3 +61,21 @@ def test_many_bodies_study_runs_and_states_its_goals(tmp_path):
     assert elastic[0][11] == "1.00"  # the 2-body elastic cost is the ratios' reference
     assert all(abs(float(r[12])) < 1e-12 for r in elastic)  # elastic: the energy is kept
     assert "- cost per collision at 8 bodies (k = 1): " in out
+
+
+def test_random_scenes_all_end_in_a_success_status_quick(tmp_path):
+    report = tmp_path / "random.md"
+    out = run_script("random_scenes.py", "--seed", "7", "--scenes", "6", "--output", str(report))
+    assert "Runs not ending in completed, max_collisions, max_events: 0" in out
+    assert report.read_text(encoding="utf-8").strip() in out
+
+
+@pytest.mark.slow
+def test_random_scenes_all_end_in_a_success_status(tmp_path):
+    # The sweep that found four engine bugs in issue 12's session (see the script's docstring).
+    for seed in (3, 5):
+        done = subprocess.run([sys.executable, str(VALIDATION / "random_scenes.py"), "--seed", str(seed),
+                               "--scenes", "150", "--output", str(tmp_path / f"r{seed}.md")],
+                              capture_output=True, text=True, timeout=1800)
+        assert done.returncode == 0, done.stderr
+        assert "Runs not ending in completed, max_collisions, max_events: 0" in done.stdout, done.stdout[-3000:]
