@@ -108,6 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
     por.add_argument("--out", default="heyroll-portrait", help="output directory (default: heyroll-portrait)")
     por.add_argument("--body", default="1", help="which body (1..N; default 1)")
     por.add_argument("--omega-max", dest="omega_max", help="bifurcation diagram from 0 to this Omega (rad/s)")
+    _add_sweep_parsers(sub)
     show = sub.add_parser("default-scene", help="print the built-in default scene as TOML")
     show.set_defaults()
     return parser
@@ -131,6 +132,10 @@ def main(argv: list[str] | None = None) -> int:
             return _equilibria(args)
         if args.command == "portrait":
             return _portrait(args)
+        if args.command == "sweep":
+            return _sweep(args, argv)
+        if args.command == "plot":
+            return _plot(args)
         return _run(args)
     except SceneError as exc:
         print(f"heyroll: error: {exc}", file=sys.stderr)
@@ -281,13 +286,11 @@ def _out_dir(text: str) -> Path:
 
 def _writable(out: Path) -> None:
     """Create ``out`` and check that files can be written in it (after every other input is checked)."""
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        probe = out / ".heyroll-write-test"
-        probe.write_bytes(b"")
-        probe.unlink()
-    except OSError as exc:
-        raise BadInput("--out", f"cannot write to {out}: {exc.strerror or exc}") from None
+    from .outputs import writable_problem
+
+    problem = writable_problem(out)
+    if problem:
+        raise BadInput("--out", problem)
 
 
 def _path_scene(path: str, command: str) -> Scene:
@@ -371,6 +374,123 @@ def _validate(args) -> int:
 
     path = validate(scene, out, source=args.scene or "<default scene>", collisions=collisions)
     print(f"wrote {path}")
+    return EXIT_OK
+
+
+class _GridAxis(argparse.Action):
+    """--vary and --values append to one list, so that the dimensions keep the command line's order."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        namespace.grid = [*(namespace.grid or []), (option_string.lstrip("-"), values)]
+
+
+def _add_sweep_parsers(sub) -> None:
+    sweep = sub.add_parser("sweep", help="run a scene over a grid, lists or a random sample of parameter values "
+                                         "(Dask), into DIR/sweep.zarr")
+    sweep.add_argument("scene", nargs="?", help="scene file (TOML), may hold a [sweep] table; the built-in default "
+                                                "scene if omitted")
+    sweep.add_argument("--vary", dest="grid", action=_GridAxis, default=[], metavar="KEY=START:STOP:N",
+                       help="a dimension: N values from START to STOP; KEY as in the scene file, e.g. "
+                            "collision.restitution, bodies[2].mass, frame.omega (repeatable)")
+    sweep.add_argument("--values", dest="grid", action=_GridAxis, metavar="KEY=v1,v2,...",
+                       help="a dimension of listed values (repeatable)")
+    sweep.add_argument("--random", action="append", default=[], metavar="KEY=LO:HI",
+                       help="random points, uniform in [LO, HI) for each KEY (with --samples, --seed)")
+    sweep.add_argument("--samples", help="number of random points")
+    sweep.add_argument("--seed", help="seed of the random points (default 0)")
+    sweep.add_argument("--keep", help="summary (default) or impacts:M, the last M impacts of each point")
+    sweep.add_argument("--out", default="heyroll-sweep", help="output directory (default: heyroll-sweep)")
+    sweep.add_argument("--workers", help="worker processes of a local Dask cluster (default: all cores; 1 runs "
+                                         "in this process, without Dask)")
+    sweep.add_argument("--scheduler", metavar="ADDRESS", help="a running dask.distributed scheduler, "
+                                                              "e.g. tcp://host:8786")
+    sweep.add_argument("--t-end", dest="t_end", help="end time in s of every point (overrides [run] t_end)")
+    sweep.add_argument("--max-collisions", dest="max_collisions", help="stop every point after N collisions")
+    sweep.add_argument("--progress", choices=("auto", "on", "off"), default="auto",
+                       help="progress bar over points on stderr (auto: if a terminal)")
+    sweep.add_argument("--no-figures", action="store_true", help="skip the figures")
+    plot = sub.add_parser("plot", help="draw a sweep's figures: bifurcation diagram (one KEY), maps (two KEYs)")
+    plot.add_argument("store", help="a sweep store, DIR/sweep.zarr")
+    plot.add_argument("--out", help="directory of the figures (default: the store's directory)")
+    plot.add_argument("--scalar", help="the per-point scalar of the maps: energy_loss, collisions, t_final, "
+                                       "relative_energy_change (default: energy_loss and collisions)")
+
+
+def _sweep_extra() -> None:
+    try:
+        import xarray  # noqa: F401  (the store's Dataset)
+        import zarr  # noqa: F401  (the store)
+    except ImportError:
+        raise BadInput("sweep", "needs the sweep extra: pip install 'heyroll[sweep]'") from None
+
+
+def _sweep(args, argv: list) -> int:
+    import shlex
+
+    from ..sweep.plan import make_plan
+    from ..sweep.run import execute
+    from ..sweep.store import store_path, stored_mask
+
+    _sweep_extra()
+    t_end = _positive_time(args.t_end) if args.t_end is not None else None
+    max_collisions = _collision_count(args.max_collisions) if args.max_collisions is not None else ...
+    workers = _collision_count(args.workers, "--workers") if args.workers is not None else None
+    if workers == 0:
+        raise BadInput("--workers", "must be >= 1")
+    if workers is not None and args.scheduler is not None:
+        raise BadInput("--workers", "a --scheduler's cluster has its own workers: give one or the other")
+    out = _out_dir(args.out)
+    plan = make_plan(args.scene, grid=args.grid, random=args.random, samples=args.samples, seed=args.seed,
+                     keep=args.keep, t_end=t_end, max_collisions=max_collisions)
+    print(f"{plan.n_points} points: " + " x ".join(f"{d} ({n})" for d, n in zip(plan.dims, plan.shape))
+          + (f" over {', '.join(k.text for k in plan.keys)}" if plan.sample is not None else ""))
+    try:
+        with _sigterm_as_interrupt():
+            outcome = execute(plan, out, workers=workers, scheduler=args.scheduler, progress=args.progress,
+                              command=shlex.join(["heyroll", *argv]), report=print)
+    except KeyboardInterrupt:
+        path = store_path(out)
+        stored = int(stored_mask(path).sum()) if path.exists() else 0
+        print(f"interrupted: {stored} of {plan.n_points} points stored in {path}; the same command continues")
+        return EXIT_INTERRUPTED
+    except OSError as exc:
+        raise BadInput("--out", f"writing the sweep to {out} failed: {exc.strerror or exc}") from None
+    if outcome.stored_before:
+        print(f"resumed: {outcome.stored_before} points were stored already")
+    print(outcome.summary_line())
+    print(f"wrote {outcome.path}")
+    if not args.no_figures:
+        _write_sweep_figures(outcome.path, out, None)
+    return EXIT_OK
+
+
+def _write_sweep_figures(store: Path, out: Path, scalar) -> None:
+    from ..sweep.figures import sweep_figures
+
+    paths = sweep_figures(store, out, scalar)
+    for path in paths:
+        print(f"wrote {path}")
+    if not paths:
+        print("no figure: figures are drawn for one or two varied KEYs")
+
+
+def _plot(args) -> int:
+    from ..sweep.errors import SweepStoreError
+    from ..sweep.store import SPEC_ATTR
+
+    _sweep_extra()
+    import zarr
+
+    store = Path(args.store)
+    try:
+        attrs = zarr.open_group(str(store), mode="r").attrs
+    except Exception as exc:  # a missing path or not a Zarr group: whatever zarr raises, one line
+        raise SweepStoreError("store", f"{store} is not a sweep store ({exc.__class__.__name__})") from None
+    if SPEC_ATTR not in attrs:
+        raise SweepStoreError("store", f"{store} is not a heyroll sweep store")
+    out = _out_dir(args.out) if args.out is not None else store.parent
+    _writable(out)
+    _write_sweep_figures(store, out, args.scalar)
     return EXIT_OK
 
 

@@ -189,6 +189,18 @@ RUN_FILES = ("collisions.csv", "collisions.npy", "collisions.parquet", "passages
              "phase_portrait.png", "energy.png")
 
 
+def writable_problem(out: Path) -> str | None:
+    """Create ``out`` and check that files can be written in it: None, or what is wrong (one line)."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".heyroll-write-test"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        return f"cannot write to {out}: {exc.strerror or exc}"
+    return None
+
+
 def prepare_run_directory(out_dir: Path) -> None:
     """Make ``out_dir`` ready for a run: created, and without an earlier run's outputs.
 

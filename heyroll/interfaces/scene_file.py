@@ -20,7 +20,9 @@ from ..model.frame import Frame
 from ..model.scene import STANDARD_GRAVITY, RunSettings, Scene
 from ..model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment, ThreeArcTrack
 
-TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "frame"}
+#: "sweep": a scene file may hold the [sweep] table of `heyroll sweep` (heyroll.sweep.plan checks
+#: it); a single run ignores it.
+TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "frame", "sweep"}
 TRACK_KEYS = {"type", "radius", "friction", "sides"}
 TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs")
 #: Keys of each path track type (paper section 5).
@@ -45,13 +47,17 @@ RUN_KEYS = {"t_end", "max_collisions"}
 def load_scene(path: str | Path) -> Scene:
     """Read and check a scene file; raises SceneError (a ValueError) on bad input."""
     path = Path(path)
+    return parse_scene(read_scene_text(path), source=str(path), default_name=path.stem)
+
+
+def read_scene_text(path: Path) -> str:
+    """A scene file's text; SceneFileError (one line) if it is missing or unreadable."""
     try:
-        text = path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise SceneFileError(str(path), "no such scene file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneFileError(str(path), f"cannot be read ({exc.__class__.__name__})") from None
-    return parse_scene(text, source=str(path), default_name=path.stem)
 
 
 def default_scene() -> Scene:

@@ -665,7 +665,7 @@ class _Stream:
         rows = getattr(self.sink, "rows", None)
         # Ctrl-C or SIGTERM during the write waits for its end (measured: a signal between the
         # sink's write and its row count left a chunk in the file twice).
-        with _signals_deferred():
+        with signals_deferred():
             try:
                 self.sink.write(chunk, first_number=log.flushed + 1)
             except BaseException:
@@ -682,7 +682,7 @@ class _Stream:
         if not log.passages or not hasattr(self.sink, "write_passages"):
             return
         table = passage_table(log.passages, first_number=log.passages_flushed + 1)
-        with _signals_deferred():  # as for collisions: a chunk is written once
+        with signals_deferred():  # as for collisions: a chunk is written once
             self.sink.write_passages(table)
             if self.kept_passages is None:
                 self.kept_passages = tuple(log.passages)
@@ -707,7 +707,7 @@ class _Stream:
 
 
 @contextlib.contextmanager
-def _signals_deferred():
+def signals_deferred():
     """SIGINT and SIGTERM wait until the block ends, then go to their handlers (main thread only)."""
     if threading.current_thread() is not threading.main_thread():
         yield

@@ -18,7 +18,8 @@ from ..interfaces import scene_file as sf
 from .errors import SweepKeyError
 
 #: Scene-file fields that hold text or tables, never a number.
-NOT_NUMERIC = {"name", "type", "sides", "y", "kind", "side", "shape", "law", "on_inconsistent", "segments", "sweep"}
+NOT_NUMERIC = {"name", "type", "sides", "y", "kind", "side", "shape", "law", "on_inconsistent", "segments", "sweep",
+               "track", "bodies", "collision", "run", "frame"}
 #: Numeric fields that take whole numbers only.
 WHOLE_NUMBERS = {"segment", "max_collisions"}
 #: Two ways of giving one quantity: a point that sets one drops the other from its copy of the
@@ -63,7 +64,7 @@ def parse_key(text: str, data: dict) -> Key:
 
 def _check(key: Key, data: dict) -> None:
     track = data.get("track") if isinstance(data.get("track"), dict) else {}
-    kind = track.get("type", "circle")
+    kind = track.get("type") if isinstance(track.get("type"), str) else "circle"  # the loader names a bad type
     path = key.path
 
     def unknown(rule: str):
@@ -108,8 +109,10 @@ def _check(key: Key, data: dict) -> None:
         "collision": sf.COLLISION_KEYS,
         "run": sf.RUN_KEYS,
     }
-    if head not in tables or len(path) != 2:
+    if head not in tables:
         unknown(f"no table {head!r} with numeric fields; tables: {', '.join(tables)}, bodies[N], and g")
+    if len(path) != 2:
+        unknown(f"name one field of [{head}], e.g. {head}.{sorted(k for k in tables[head] if k not in NOT_NUMERIC)[0]}")
     if path[1][1] is not None:
         unknown(f"{path[1][0]} is not an array")
     numeric(path[1][0], tables[head], f"[{head}]")

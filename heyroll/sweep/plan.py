@@ -156,7 +156,7 @@ def read_scene(scene=None, *, scene_text: str | None = None) -> tuple:
     """(parsed TOML, text, source, default name) of a scene file path, TOML text, or the default scene."""
     from pathlib import Path
 
-    from ..interfaces.scene_file import default_scene_text
+    from ..interfaces.scene_file import default_scene_text, read_scene_text
 
     if scene is not None and scene_text is not None:
         raise SweepError("scene", "give a scene file or scene_text, not both")
@@ -166,12 +166,7 @@ def read_scene(scene=None, *, scene_text: str | None = None) -> tuple:
         text, source, name = default_scene_text(), "<default scene>", "scene"
     else:
         path = Path(scene)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except FileNotFoundError:
-            raise SceneFileError(str(path), "no such scene file") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise SceneFileError(str(path), f"cannot be read ({exc.__class__.__name__})") from None
+        text = read_scene_text(path)
         source, name = str(path), path.stem
     try:
         data = tomllib.loads(text, parse_float=Decimal)
@@ -241,6 +236,15 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
         sample = Sample(tuple(bounds), n, s, values)
     elif samples is not None or seed is not None:
         raise SweepError("--samples", "--samples and --seed go with --random")
+    if t_end is not None:
+        try:
+            t_end = float(t_end)
+        except (TypeError, ValueError):
+            t_end = math.nan
+        if not math.isfinite(t_end) or t_end <= 0:
+            raise SweepError("--t-end", "must be a finite number > 0")
+    if max_collisions is not ... and max_collisions is not None:
+        max_collisions = _whole(max_collisions, "--max-collisions", minimum=0, what="max_collisions")
     shape = (sample.samples,) if sample else tuple(len(a.values) for a in axes)
     n_points = math.prod(shape)
     if chunk_points is None:

@@ -116,7 +116,7 @@ def run_chunk(chunk: Chunk) -> dict:
 
 
 def _run_point(chunk: Chunk, values: tuple, options: RunOptions, columns: dict, row: int) -> None:
-    data = _point_data(chunk.data, chunk.keys, values)
+    data = point_data(chunk.data, chunk.keys, values)
     try:
         scene = scene_from_dict(data, default_name=chunk.default_name)
     except SceneError as exc:
@@ -142,7 +142,7 @@ def _run_point(chunk: Chunk, values: tuple, options: RunOptions, columns: dict, 
             columns[f"impact_{c}"][row, :table.size] = table[c]
 
 
-def _point_data(data: dict, keys: tuple, values: tuple) -> dict:
+def point_data(data: dict, keys: tuple, values: tuple) -> dict:
     """A deep copy of the base scene's TOML with the point's values written in."""
     point = copy.deepcopy(data)
     for key, value in zip(keys, values):

@@ -4,10 +4,11 @@ Layout (README, "Sweeps"): one dimension per varied KEY, named by the KEY,
 its values as the coordinate (a random sample: a ``point`` dimension with the
 sampled values as coordinates along it); per point ``status``, ``message``,
 ``collisions``, ``t_final``, ``energy_initial``, ``energy_final``,
-``final_state`` (dimension ``state``: phi1..phiN, dphi1..dphiN), and with
---keep impacts:M the last M impacts as ``impact_*`` variables with a trailing
-``impact`` dimension of length M (padded: NaN, and 0 for the body and
-collision numbers, where a point had fewer than M collisions). Attributes:
+``final_state`` (dimension ``state``: phi1..phiN, dphi1..dphiN; s or x on a
+path track), and with --keep impacts:M the last M impacts as ``impact_*``
+variables with a trailing ``impact`` dimension of length M (padded: NaN, and
+0 for the body and collision numbers, where a point had fewer than M
+collisions). Attributes:
 the sweep's spec (``heyroll_sweep_spec``, JSON), versions, the base scene's
 text and source, the command.
 
@@ -30,7 +31,7 @@ import numpy as np
 
 from .errors import SweepStoreError
 from .plan import SweepPlan
-from .points import IMPACT_COLUMNS, empty_columns
+from .points import empty_columns
 
 STORE_NAME = "sweep.zarr"
 SPEC_ATTR = "heyroll_sweep_spec"
@@ -76,9 +77,8 @@ def template(plan: SweepPlan, attrs: dict):
     unit = COORDINATE_UNITS.get(q, "")
     variables = {}
     for name, column in columns.items():
-        extra = {"final_state": ("state",)}.get(name, ("impact",) if name.startswith("impact_") else ())
         description, units = VARIABLES[name]
-        variables[name] = (dims + extra, column.reshape(shape + column.shape[1:]),
+        variables[name] = (_dims(name, dims), column.reshape(shape + column.shape[1:]),
                            {"description": description, "units": units.format(q=unit)} if units else
                            {"description": description})
     n = plan.n_bodies
@@ -97,16 +97,22 @@ def template(plan: SweepPlan, attrs: dict):
     return xr.Dataset(variables, coords=coords, attrs=attrs)
 
 
+def _dims(name: str, dims: tuple) -> tuple:
+    """A variable's dimensions: the point dimensions, then ``state`` or ``impact`` for the per-point vectors."""
+    if name == "final_state":
+        return dims + ("state",)
+    return dims + ("impact",) if name.startswith("impact_") else dims
+
+
 def _key_attrs(plan: SweepPlan, key) -> dict:
     units = plan.units(key)
     return {"long_name": key.text, **({"units": units} if units else {})}
 
 
 def open_or_create(plan: SweepPlan, out_dir: Path, attrs: dict) -> Path:
-    """The store of ``plan`` in ``out_dir``: created, or an existing one of the same spec (else SweepStoreError)."""
+    """The store of ``plan`` in ``out_dir``: created, or the existing one (its spec checked first: check_spec)."""
     path = store_path(out_dir)
     if path.exists():
-        check_spec(path, plan, attrs["versions"])
         for partial in path.rglob("*.partial"):
             if _PARTIAL.search(partial.name):
                 partial.unlink()
@@ -151,28 +157,32 @@ def stored_mask(path: Path) -> np.ndarray:
     return np.asarray(status, dtype=object).reshape(-1) != ""
 
 
-def write_chunk(path: Path, plan: SweepPlan, region: dict, columns: dict) -> None:
-    """Write one chunk's columns (rows in C order over ``region``) as region writes, ``status`` last."""
-    import xarray as xr
+class ChunkWriter:
+    """Writes chunks of points into the store, each variable's region straight into its Zarr array.
 
-    shape = tuple(s.stop - s.start for s in region.values())
-    dims = plan.dims
-    variables = {}
-    for name, column in columns.items():
-        extra = {"final_state": ("state",)}.get(name, ("impact",) if name.startswith("impact_") else ())
-        variables[name] = (dims + extra, column.reshape(shape + column.shape[1:]))
-    ds = xr.Dataset(variables)
-    data = [name for name in ds.data_vars if name != "status"]
-    ds[data].to_zarr(path, region=region, mode="r+", consolidated=False)
-    ds[["status"]].to_zarr(path, region=region, mode="r+", consolidated=False)
+    The store was created by xarray with plain encodings (no scaling, the
+    fill values of ``empty_columns``), so the raw values are what xarray reads
+    back; one open group for the whole sweep costs a third of an xarray
+    region write per chunk (measured: 18 ms against 60 ms for 7 variables).
+    """
+
+    def __init__(self, path: Path):
+        import zarr
+
+        self._group = zarr.open_group(str(path), mode="r+")
+
+    def write(self, region: dict, columns: dict) -> None:
+        """One chunk's columns (rows in C order over ``region``), ``status`` last: it marks the points stored."""
+        index = tuple(region.values())
+        shape = tuple(s.stop - s.start for s in index)
+        for name in [n for n in columns if n != "status"] + ["status"]:
+            column = columns[name]
+            self._group[name][index] = column.reshape(shape + column.shape[1:])
 
 
-def open_sweep(path) -> "xr.Dataset":
+def open_sweep(path):
     """A sweep store as an xarray Dataset, loaded into memory."""
     import xarray as xr
 
     with xr.open_zarr(path, consolidated=False, chunks=None) as ds:
-        return ds.load()
-
-
-__all__ = ["IMPACT_COLUMNS", "STORE_NAME", "open_or_create", "open_sweep", "stored_mask", "write_chunk"]
+        return ds[[name for name in VARIABLES if name in ds.data_vars]].load()  # in VARIABLES' order

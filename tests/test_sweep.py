@@ -1,0 +1,297 @@
+"""Sweeps (issue 16): grid, list and random points, the store, resume, bad input, Dask, figures."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from decimal import Decimal
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+xr = pytest.importorskip("xarray")
+pytest.importorskip("zarr")
+
+import heyroll
+from heyroll.interfaces.cli import main
+from heyroll.interfaces.scene_file import default_scene_text
+from heyroll.sweep import SweepError, SweepKeyError, SweepStoreError, open_sweep, run_sweep
+from heyroll.sweep import run as sweep_run
+from heyroll.sweep.plan import make_plan
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Short runs of the default scene: a few collisions each, well under a second for a whole sweep.
+T_END = 10.0
+
+
+def scene_with(text: str, **fields) -> str:
+    """The default scene's text with top-level-table lines ``field = value`` replaced (value as written)."""
+    lines = []
+    table = ""
+    for line in text.splitlines():
+        stripped = line.strip()
+        if stripped.startswith("["):
+            table = stripped.strip("[]")
+        name = stripped.split("=")[0].strip()
+        if f"{table}.{name}" in fields:
+            line = f"{name} = {fields[f'{table}.{name}']}"
+        lines.append(line)
+    return "\n".join(lines) + "\n"
+
+
+def test_a_grid_point_is_what_simulate_gives_for_that_scene_alone_to_the_last_bit(tmp_path):
+    ds = run_sweep(vary={"collision.restitution": "0.8:1:3"}, keep="impacts:4", t_end=T_END, workers=1,
+                   out=tmp_path)
+    assert ds["collision.restitution"].values.tolist() == [0.8, 0.9, 1.0]
+    for k, text in enumerate(["0.8", "0.9", "1.0"]):  # the decimal a scene file would hold
+        scene = heyroll.parse_scene(scene_with(default_scene_text(), **{"collision.restitution": text}))
+        result = heyroll.simulate(scene, t_end=T_END)
+        point = ds.isel({"collision.restitution": k})
+        assert str(point["status"].values) == result.status.value
+        assert str(point["message"].values) == result.message
+        assert int(point["collisions"]) == result.n_collisions > 4
+        assert float(point["t_final"]) == float(result.t_final)
+        assert float(point["energy_initial"]) == result.energy_initial
+        assert float(point["energy_final"]) == result.energy_final
+        assert np.array_equal(point["final_state"].values, result.final_state)
+        last = result.collision_table()[-4:]
+        for column in ("n", "t", "i", "j", "q_i", "q_j", "dq_i_before", "dq_j_before", "dq_i_after", "dq_j_after"):
+            assert np.array_equal(point[f"impact_{column}"].values, last[column]), column
+
+
+def test_grid_values_are_the_decimals_start_to_stop():
+    plan = make_plan(grid=[("vary", "collision.restitution=0.5:1:6"), ("vary", "g=9:10:3")])
+    assert plan.axes[0].values == tuple(Decimal(v) for v in ("0.5", "0.6", "0.7", "0.8", "0.9", "1.0"))
+    assert plan.axes[1].values == (Decimal(9), Decimal("9.5"), Decimal(10))
+    assert plan.dims == ("collision.restitution", "g") and plan.shape == (6, 3) and plan.n_points == 18
+
+
+def test_two_dimensions_in_command_line_order_with_units(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["sweep", "--values", "bodies[2].mass=50,100", "--vary", "bodies[1].dphi=0:1:3",
+                 "--t-end", "2", "--workers", "1", "--out", str(out), "--progress", "off"]) == 0
+    ds = open_sweep(out / "sweep.zarr")
+    assert ds["status"].dims == ("bodies[2].mass", "bodies[1].dphi")
+    assert ds["bodies[2].mass"].values.tolist() == [50.0, 100.0]
+    assert ds["bodies[1].dphi"].values.tolist() == [0.0, 0.5, 1.0]
+    assert ds["bodies[2].mass"].attrs["units"] == "kg" and ds["bodies[1].dphi"].attrs["units"] == "rad/s"
+    assert ds["final_state"].dims[-1] == "state" and ds["state"].values.tolist() == ["phi1", "phi2", "dphi1", "dphi2"]
+    assert set(ds["status"].values.ravel()) == {"completed"}
+    # A body given by density takes the point's mass instead (mass and density are one quantity).
+    alone = heyroll.parse_scene(default_scene_text().replace("radius = 0.15\ndensity = 7850.0", "radius = 0.15\nmass = 100"))
+    assert float(alone.bodies[1].mass) == 100.0
+    assert float(ds["energy_initial"].sel({"bodies[2].mass": 100.0, "bodies[1].dphi": 0.0})) == \
+        heyroll.simulate(alone, t_end=0.1).energy_initial
+    printed = capsys.readouterr().out
+    assert "6 points: bodies[2].mass (2) x bodies[1].dphi (3)" in printed
+    assert "6 points: 6 completed" in printed
+    assert (out / "map_energy_loss.png").read_bytes()[:4] == b"\x89PNG"
+    assert (out / "map_collisions.png").is_file()
+
+
+def test_random_points_from_the_seed(tmp_path):
+    ds = run_sweep(random={"bodies[1].phi": (-1.2, -0.8), "collision.restitution": "0.5:1"}, samples=5, seed=3,
+                   t_end=1.0, workers=1, out=tmp_path)
+    draws = np.random.default_rng(3)
+    assert ds["status"].dims == ("point",) and ds["point"].values.tolist() == [0, 1, 2, 3, 4]
+    assert np.array_equal(ds["bodies[1].phi"].values, draws.uniform(-1.2, -0.8, 5))
+    assert np.array_equal(ds["collision.restitution"].values, draws.uniform(0.5, 1.0, 5))
+    assert ds["bodies[1].phi"].attrs["units"] == "rad"
+    assert set(ds["status"].values) == {"completed"}
+
+
+def test_a_sweep_table_in_the_scene_file_and_run_ignores_it(tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text(default_scene_text() + '\n[sweep]\nvalues = ["collision.restitution=0.5,1"]\nkeep = "impacts:2"\n')
+    assert main(["sweep", str(scene), "--t-end", "1", "--workers", "1", "--out", str(tmp_path / "s"),
+                 "--no-figures", "--progress", "off"]) == 0
+    ds = open_sweep(tmp_path / "s" / "sweep.zarr")
+    assert ds["collision.restitution"].values.tolist() == [0.5, 1.0] and ds.sizes["impact"] == 2
+    assert main(["run", str(scene), "--t-end", "1", "--out", str(tmp_path / "r"), "--no-figures"]) == 0
+
+
+def test_invalid_points_are_recorded_and_the_sweep_goes_on(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["sweep", "--values", "bodies[1].radius=0.1,1.5", "--values", "collision.restitution=0.5,1.5",
+                 "--t-end", "1", "--workers", "1", "--out", str(out), "--progress", "off", "--no-figures"]) == 0
+    ds = open_sweep(out / "sweep.zarr")
+    status = ds["status"].values
+    assert status[0, 0] == "completed"
+    assert status[0, 1] == status[1, 0] == status[1, 1] == "invalid_scene"
+    assert str(ds["message"].values[1, 0]).startswith("bodies[1].radius:")
+    assert str(ds["message"].values[0, 1]).startswith("collision.restitution:")
+    assert int(ds["collisions"].values[1, 0]) == -1 and np.isnan(ds["t_final"].values[1, 0])
+    assert "4 points: 3 invalid_scene, 1 completed" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("key, says", [
+    ("bodies[3].mass", "the scene has 2 bodies"),
+    ("collision.law", "no numeric field 'law'"),
+    ("frame.omga", "no numeric field 'omga'"),
+    ("track.hump_radius", "no numeric field 'hump_radius'"),
+    ("bodies.mass", "name a body"),
+])
+def test_an_unknown_key_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, key, says):
+    out = tmp_path / "out"
+    assert main(["sweep", "--vary", f"{key}=0:1:3", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith(f"heyroll: error: {key}: unknown sweep key") and says in err
+    assert not out.exists()
+    with pytest.raises(SweepKeyError) as caught:
+        make_plan(grid=[("vary", f"{key}=0:1:3")])
+    assert isinstance(caught.value, ValueError) and caught.value.field == key
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--vary", "g=1:2"], "expected START:STOP:N"),
+    (["--vary", "g=1:2:0"], "N in START:STOP:N"),
+    (["--values", "g=1,x"], "'x' is not a number"),
+    (["--values", "g=1,1.0"], "repeated"),
+    (["--random", "g=2:1", "--samples", "3"], "LO < HI"),
+    (["--random", "g=1:2"], "the number of random points"),
+    (["--vary", "g=1:2:3", "--random", "g=1:2", "--samples", "2"], "not both"),
+    (["--vary", "g=1:2:3", "--keep", "impacts:0"], "M in impacts:M"),
+    (["--vary", "g=1:2:3", "--vary", "g=3:4:2"], "varied twice"),
+    (["--values", "run.max_collisions=1.5,2"], "whole numbers"),
+    ([], "nothing to sweep"),
+])
+def test_bad_sweep_specs_are_one_line_exit_2(tmp_path, capsys, args, says):
+    out = tmp_path / "out"
+    assert main(["sweep", *args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and says in err, err
+    assert not out.exists()
+
+
+def test_resume_after_an_interruption_gives_the_identical_store(tmp_path):
+    plan = make_plan(grid=[("vary", "collision.restitution=0.6:1.0:5"), ("values", "bodies[1].dphi=0,0.5")],
+                     keep="impacts:3", t_end=T_END, chunk_points=2)
+    assert plan.chunks == (1, 2) and len(plan.regions()) == 5
+    sweep_run.execute(plan, tmp_path / "whole", workers=1, command="sweep")
+
+    def stop_after_two_chunks(n):
+        if n == 2:
+            raise KeyboardInterrupt  # as Ctrl-C between two chunks
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep_run.execute(plan, tmp_path / "part", workers=1, command="sweep", after_chunk=stop_after_two_chunks)
+    partial = open_sweep(tmp_path / "part" / "sweep.zarr")
+    assert (partial["status"].values != "").sum() == 4  # two chunks of two points
+    outcome = sweep_run.execute(plan, tmp_path / "part", workers=1, command="sweep")
+    assert outcome.stored_before == 4 and outcome.statuses == {"completed": 10}
+    assert open_sweep(tmp_path / "part" / "sweep.zarr").identical(open_sweep(tmp_path / "whole" / "sweep.zarr"))
+
+
+def _cli(args: list, cwd: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "heyroll.interfaces.cli", *args], cwd=cwd,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _stored(store: Path) -> int:
+    """Points stored so far (0 while the store does not exist yet)."""
+    import zarr
+
+    try:
+        return int((zarr.open_array(str(store / "status"), mode="r")[...] != "").sum())
+    except Exception:  # not created yet (zarr's error type for a missing array varies by version)
+        return 0
+
+
+ARGS = ["sweep", "--vary", "bodies[1].phi=-1.2:-0.8:48", "--t-end", "1500", "--keep", "impacts:2", "--workers", "1",
+        "--out", "out", "--no-figures", "--progress", "off"]
+
+
+def _stop_when_a_chunk_is_stored(process: subprocess.Popen, store: Path, sig) -> tuple:
+    deadline = time.monotonic() + 60
+    while _stored(store) == 0 and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    process.send_signal(sig)
+    stdout, _ = process.communicate(timeout=60)
+    assert 0 < _stored(store) < 48, "the sweep ended before the signal: make its points longer"
+    return process.returncode, stdout
+
+
+def test_a_sigkilled_cli_sweep_resumed_by_the_same_command_gives_the_identical_store(tmp_path):
+    # The same relative --out in two directories: the recorded command is the same text.
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    reference = _cli(ARGS, tmp_path / "a")
+    store = tmp_path / "b" / "out" / "sweep.zarr"
+    code, _ = _stop_when_a_chunk_is_stored(_cli(ARGS, tmp_path / "b"), store, signal.SIGKILL)
+    assert code == -signal.SIGKILL
+    resumed = _cli(ARGS, tmp_path / "b")
+    assert resumed.wait(timeout=120) == 0 and reference.wait(timeout=120) == 0
+    assert "resumed:" in resumed.stdout.read()
+    assert open_sweep(store).identical(open_sweep(tmp_path / "a" / "out" / "sweep.zarr"))
+    assert not list(store.rglob("*.partial"))
+
+
+def test_ctrl_c_stops_a_cli_sweep_with_exit_130_and_whole_chunks(tmp_path):
+    store = tmp_path / "out" / "sweep.zarr"
+    code, stdout = _stop_when_a_chunk_is_stored(_cli(ARGS, tmp_path), store, signal.SIGINT)
+    assert code == 130 and "interrupted:" in stdout and "the same command continues" in stdout
+    status = open_sweep(store)["status"].values
+    stored = status != ""
+    assert stored.sum() % 3 == 0  # chunks of 3 points (48 / 16), each stored whole or not at all
+    assert set(status[stored]) == {"completed"}
+
+
+def test_a_store_of_another_sweep_is_refused_and_left_as_it_was(tmp_path, capsys):
+    out = tmp_path / "out"
+    common = ["--t-end", "1", "--workers", "1", "--out", str(out), "--no-figures", "--progress", "off"]
+    assert main(["sweep", "--values", "collision.restitution=0.5,1", *common]) == 0
+    before = {p: p.stat().st_mtime_ns for p in out.rglob("*")}
+    capsys.readouterr()
+    assert main(["sweep", "--values", "collision.restitution=0.5,0.9", *common]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "belongs to a different sweep (grid differ)" in err
+    assert {p: p.stat().st_mtime_ns for p in out.rglob("*")} == before
+    (tmp_path / "other" / "sweep.zarr").mkdir(parents=True)
+    with pytest.raises(SweepStoreError, match="not a heyroll sweep store"):
+        run_sweep(values={"g": [9, 10]}, out=tmp_path / "other", workers=1)
+
+
+def test_an_unreachable_scheduler_is_one_line_exit_2(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(sweep_run, "SCHEDULER_TIMEOUT", 1)
+    out = tmp_path / "out"
+    assert main(["sweep", "--vary", "g=9:10:2", "--scheduler", "tcp://127.0.0.1:9", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("heyroll: error: --scheduler: cannot reach the dask scheduler")
+    assert not out.exists()
+
+
+def test_a_local_two_worker_cluster_gives_the_in_process_store(tmp_path, capsys):
+    spec = dict(vary={"collision.restitution": (0.5, 1.0, 12)}, keep="impacts:3", t_end=T_END)
+    alone = run_sweep(out=tmp_path / "alone", workers=1, **spec)
+    assert len(make_plan(grid=[("vary", "collision.restitution=0.5:1.0:12")]).regions()) == 12  # a task each
+    cluster = run_sweep(out=tmp_path / "cluster", workers=2, **spec)
+    assert cluster.identical(alone)
+
+
+def test_plot_draws_the_bifurcation_diagram_of_one_key(tmp_path, capsys):
+    run_sweep(vary={"collision.restitution": (0.7, 1.0, 4)}, keep="impacts:5", t_end=T_END, workers=1, out=tmp_path)
+    figures = tmp_path / "figures"
+    assert main(["plot", str(tmp_path / "sweep.zarr"), "--out", str(figures)]) == 0
+    assert (figures / "bifurcation.png").read_bytes()[:4] == b"\x89PNG"
+    assert f"wrote {figures / 'bifurcation.png'}" in capsys.readouterr().out
+    assert main(["plot", str(tmp_path / "nothing.zarr")]) == 2
+    assert "is not a sweep store" in capsys.readouterr().err
+    with pytest.raises(SweepError, match="--scalar"):
+        from heyroll.sweep.figures import sweep_figures
+
+        sweep_figures(tmp_path / "sweep.zarr", figures, "speed")
+
+
+def test_sweep_speed_study_runs_and_prints_its_report(tmp_path):
+    report = tmp_path / "sweep_speed.md"
+    done = subprocess.run([sys.executable, str(ROOT / "validation" / "sweep_speed.py"), "--points", "64",
+                           "--output", str(report)], capture_output=True, text=True, timeout=240)
+    assert done.returncode == 0, done.stderr
+    assert report.read_text(encoding="utf-8").strip() == done.stdout.strip()
+    rows = [line for line in done.stdout.splitlines() if line.startswith("| ") and "---" not in line][1:]
+    assert [r.split("|")[1].strip() for r in rows][:2] == ["loop: load + simulate", "loop: simulate only"]
+    assert all(float(r.split("|")[4]) > 0 for r in rows)  # points per second
+    assert [r.split("|")[7].strip() for r in rows[2:]] == ["yes"] * 3  # the loop's results, to the last bit
