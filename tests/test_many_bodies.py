@@ -323,3 +323,23 @@ def test_two_particles_left_at_rest_on_top_of_each_other_stay_there():
     assert result.status is Status.COMPLETED, result.message
     final = np.asarray(result.final_state, dtype=float)
     assert np.all(np.abs(final) < 1e-12)  # both at rest at the bottom
+
+
+def test_the_phase_portrait_of_many_bodies_is_a_grid(tmp_path):
+    # 50 bodies in one column made a 1040 x 20800 pixel strip; up to 4 columns now.
+    import matplotlib.image
+
+    from heyroll.interfaces.figures import phase_portrait_figure
+    from heyroll.model.bodies import Body
+    from heyroll.model.scene import RunSettings, Scene
+    from heyroll.model.tracks import CircleTrack
+
+    n = 12
+    bodies = [Body.of_shape("disk", "0.05", mass="1")] * n
+    phi = [str(round(-2.8 + 5.6 * k / (n - 1), 6)) for k in range(n)]
+    scene = Scene.make(CircleTrack.of_radius(1), bodies, phi=phi, dphi=["0.5", "-0.5"] * (n // 2),
+                       run=RunSettings.make(2))
+    path = tmp_path / "portrait.png"
+    phase_portrait_figure(heyroll.simulate(scene), path)
+    height, width = matplotlib.image.imread(path).shape[:2]
+    assert width > 1040 and height < 3 * width  # 3 columns of 4 rows, not a strip of 12

@@ -38,13 +38,19 @@ def phase_portrait_figure(result: SimulationResult, path: Path, *, collisions: i
     n_bodies = result.n_bodies
     shown = min(collisions, result.kept_collisions)
     branches = sample_branches(result, max_branches=shown + 1)
-    fig = Figure(figsize=(8, 3.2 * n_bodies), layout="constrained")
+    # One column up to 4 bodies, then up to 4 columns (50 bodies in one column made a
+    # 1040 x 20800 pixel strip: measured).
+    n_cols = min(4, -(-n_bodies // 4))
+    n_rows = -(-n_bodies // n_cols)
+    fig = Figure(figsize=(8 if n_cols == 1 else 4.5 * n_cols, 3.2 * n_rows if n_cols == 1 else 2.8 * n_rows),
+                 layout="constrained")
     stiffness = [float(result.scene.track.angular_stiffness(b, result.scene.g)) for b in result.scene.bodies]
     colours = _branch_colours(len(branches))
     table = result.collision_table()[:shown]
     for k in range(n_bodies):
-        # Body N on top, body 1 at the bottom, as in the paper.
-        ax = fig.add_subplot(n_bodies, 1, n_bodies - k)
+        # Body N on top, body 1 at the bottom, as in the paper (row by row in a grid).
+        cell = n_bodies - k
+        ax = fig.add_subplot(n_rows, n_cols, cell)
         phis = np.concatenate([b.states[:, k] for b in branches])
         rates = np.concatenate([b.states[:, n_bodies + k] for b in branches])
         _background(ax, stiffness[k], phis, rates)
@@ -57,9 +63,9 @@ def phase_portrait_figure(result: SimulationResult, path: Path, *, collisions: i
                 ax.vlines(phi, rows[f"dq_{side}_before"], rows[f"dq_{side}_after"], colors="k", linestyles="--", lw=0.8)
                 ax.plot(phi, rows[f"dq_{side}_before"], "o", ms=3.5, color="k", label=None)
                 ax.plot(phi, rows[f"dq_{side}_after"], "s", ms=3.5, mfc="white", mec="k")
-        ax.set_ylabel(f"$\\dot\\varphi_{k + 1}$ (rad/s)")
+        ax.set_ylabel(f"$\\dot\\varphi_{{{k + 1}}}$ (rad/s)")
         ax.set_title(f"body {k + 1}: {result.scene.bodies[k].describe()}", fontsize=9)
-        if k == 0:
+        if cell + n_cols > n_bodies:  # no cell below it
             ax.set_xlabel("$\\varphi$ (rad)")
     fig.suptitle(
         f"Phase trajectory branches with jumps at collisions (first {shown} of {result.n_collisions}); "
