@@ -191,3 +191,28 @@ def test_a_pickled_scene_keeps_its_exact_numbers(name):
         return []
 
     assert mantissas(copy) == mantissas(scene) and max(m[3] for m in mantissas(scene)) > 53
+
+
+def test_a_body_of_radius_1e_212_beside_a_ball_touches_it_at_one_angle():
+    # Found by the slow fuzz run: cos beta rounded a hair above 1 at 256 bits and acos turned
+    # complex (a TypeError). A point on the wall touches a ball at the ball's own contact angle.
+    text = (
+        'g = 9.81\n[track]\ntype = "circle"\nradius = 2\n'
+        '[[bodies]]\nshape = "solid_sphere"\nradius = 1.4070396712726255e-212\nmass = 1.0\nphi = -0.5\ndphi = 0.0\n'
+        '[[bodies]]\nshape = "disk"\nradius = 0.15\nmass = 1.0\nphi = 0.5\ndphi = 0.3\n'
+        '[collision]\nlaw = "hedrih"\nrestitution = 0.8\n[run]\nt_end = 1.0\n'
+    )
+    scene = parse_scene(text)
+    assert scene.pairs[0].beta == 0
+
+
+def test_a_frame_turning_at_1e154_rad_s_is_refused_by_field():
+    # Found by the slow fuzz run: Omega^2 overflowed a Python float (OverflowError traceback).
+    text = (
+        '[track]\ntype = "curve"\ny = "0.5*x**2"\nx_min = -1.6\nx_max = 1.6\n'
+        '[frame]\nomega = 1.3407807929942597e+154\n'
+        '[[bodies]]\nshape = "disk"\nradius = 0.05\nmass = 1.0\nx = 0.3\ndx = 0.0\n'
+        '[collision]\nlaw = "newton"\n[run]\nt_end = 1.0\n'
+    )
+    with pytest.raises(SceneError, match="not a finite double.*frame.omega"):
+        parse_scene(text)

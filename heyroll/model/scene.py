@@ -202,12 +202,15 @@ class Scene:
                         raise SceneError("track.radius", f"the {name} of body {n + 1} ({mpmath.nstr(value, 6)}) is "
                                          "not a finite double: the radius, the masses or g are out of range")
             with np.errstate(all="ignore"):  # an overflow is what is checked here, not a warning
-                total = float(self.body_energy(n))
-                at_rest = float(self.body_energy(n, dphi=0))
+                try:
+                    total = float(self.body_energy(n))
+                    at_rest = float(self.body_energy(n, dphi=0))
+                except OverflowError:  # Python floats raise it (Omega^2 of a frame at 1e154 rad/s: fuzz)
+                    total = at_rest = math.inf
             if not math.isfinite(at_rest):
                 where = "track.radius" if self.track.linear_gap else "track"
                 raise SceneError(where, f"the potential energy of body {n + 1} ({at_rest}) is not a finite double: "
-                                 "the track's size, the masses or g are out of range")
+                                 "the track's size, the masses, g or frame.omega are out of range")
             if not math.isfinite(total):
                 raise SceneError(f"bodies[{n + 1}].d{self.coordinate}",
                                  f"the kinetic energy of body {n + 1} is not a finite double: the rate is out of range")

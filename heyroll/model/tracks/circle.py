@@ -134,7 +134,9 @@ class CircleTrack:
             cos_beta = (rho_i**2 + rho_j**2 - d**2) / (2 * rho_i * rho_j)
             if cos_beta <= -1:
                 raise ValueError("bodies too large to touch side by side: r_i + r_j must be < R")
-            return mpmath.acos(cos_beta)
+            # Bodies of radius ~1e-200 beside a circle of metres: cos beta rounds a hair above 1
+            # at 256 bits, where acos turns complex (found by the slow fuzz run). beta is 0 there.
+            return mpmath.acos(min(cos_beta, mpmath.mpf(1)))
 
     def contact_potential_minimum(self, body_i: Body, body_j: Body, g: mpmath.mpf) -> mpmath.mpf:
         """Least potential energy of the pair over all configurations where they touch.
