@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import SceneError
 from ._numbers import Real, exact_state, from_exact_state, is_finite, to_mpf, workprec
 from .bodies import Body
+from .forcing import Forcing
 from .frame import STATIONARY, Frame
 from .laws import CollisionLaw, HedrihRollingLaw, ImpulseMap, conserves_mechanical_energy_bound, impulse_map
 from .laws.base import check_restitution
@@ -111,7 +112,8 @@ class Scene:
     law: CollisionLaw
     run: RunSettings
     name: str = "scene"
-    #: Coefficient of friction between the bodies and the track (None: rolling never slips).
+    #: Coefficient of kinetic (Coulomb) friction between the bodies and the track (None: a
+    #: smooth track for particles, rolling that never slips for bodies; see simulation.friction).
     track_friction: mpmath.mpf | None = None
     #: What to do when the law's outcome leaves two bodies approaching: "newton" or "error".
     on_inconsistent: str = "newton"
@@ -123,6 +125,12 @@ class Scene:
     frame: Frame = STATIONARY
     #: Restitution at the limiters of an open track (q' -> -k q').
     limiter_restitution: mpmath.mpf = mpmath.mpf(1)
+    #: Coefficient of static friction mu_s >= mu (None: mu_s = mu), with track_friction.
+    static_friction: mpmath.mpf | None = None
+    #: Initial slip velocity w = v_C - r omega_P of each body on a rough track (m/s; 0: rolling).
+    slip: tuple = ()
+    #: Periodic forcing (a force along the track or a motion of the track), or None.
+    forcing: Forcing | None = None
     pairs: tuple[ContactPair, ...] = field(default=(), compare=False)
 
     @classmethod
@@ -144,6 +152,9 @@ class Scene:
         track_sides: str = "two",
         frame: Frame = STATIONARY,
         limiter_restitution: Real | None = None,
+        static_friction: Real | None = None,
+        slip=None,
+        forcing: Forcing | None = None,
     ) -> "Scene":
         """``q``/``dq`` (or, on a circle, their names ``phi``/``dphi``): one per body."""
         q = phi if q is None else q
@@ -169,6 +180,24 @@ class Scene:
             if not is_finite(friction) or to_mpf(friction) < 0:
                 raise SceneError("track.friction", f"must be a finite number >= 0, got {friction!r}")
             mu = to_mpf(friction)
+        mu_s = None
+        if static_friction is not None:
+            if mu is None:
+                raise SceneError("track.static_friction", "needs track.friction (the kinetic coefficient mu)")
+            if not is_finite(static_friction) or to_mpf(static_friction) < mu:
+                raise SceneError("track.static_friction",
+                                 f"must be a finite number >= track.friction = {mpmath.nstr(mu, 17)}, got {static_friction!r}")
+            mu_s = to_mpf(static_friction)
+        slips = tuple(mpmath.mpf(0) for _ in bodies)
+        if slip is not None:
+            if len(slip) != len(bodies):
+                raise SceneError("bodies", "need one slip per body")
+            slips = tuple(_finite(w, f"bodies[{n}].slip") for n, w in enumerate(slip, start=1))
+            for n, (w, body) in enumerate(zip(slips, bodies), start=1):
+                if w != 0 and mu is None:
+                    raise SceneError(f"bodies[{n}].slip", "a body can slip only on a rough track: give track.friction")
+                if w != 0 and (body.is_particle or body.kappa == 1):
+                    raise SceneError(f"bodies[{n}].slip", "only a rolling body (kappa > 1, r > 0) has a slip velocity")
         if on_inconsistent not in INCONSISTENCY_POLICIES:
             raise SceneError(
                 "collision.on_inconsistent",
@@ -184,7 +213,7 @@ class Scene:
         scene = cls(
             g=gv, track=track, bodies=bodies, q=qs, dq=dqs, law=law, run=run or RunSettings.make(), name=name,
             track_friction=mu, on_inconsistent=on_inconsistent, track_sides=track_sides, frame=frame,
-            limiter_restitution=k_lim,
+            limiter_restitution=k_lim, static_friction=mu_s, slip=slips, forcing=forcing,
         )
         scene._check_finite_energies()
         pairs = scene._linear_gap_pairs() if track.linear_gap else scene._open_pairs()
@@ -317,7 +346,7 @@ class Scene:
                     f"counter-clockwise with neighbours at least beta = {mpmath.nstr(beta, 10)} rad apart",
                 )
             reachable = True
-            if energy_bounded and not self.frame.rotating:
+            if energy_bounded and not self.frame.rotating and self.forcing is None:
                 reachable = energy >= self._least_contact_energy(i, j, beta, wraps) * (1 - mpmath.mpf(10) ** -9)
             pairs.append(
                 ContactPair(
@@ -376,7 +405,8 @@ class Scene:
         the track gives no lowest height (the events are then all watched).
         """
         track = self.track
-        if self.frame.rotating or not hasattr(track, "lowest_centre") or not track.constant_metric:
+        if self.frame.rotating or self.forcing is not None or not hasattr(track, "lowest_centre") \
+                or not track.constant_metric:
             return None
         if self.limiter_restitution > 1 or self.law.restitution > 1:
             return None
@@ -389,9 +419,27 @@ class Scene:
             others = mpmath.fsum(b.mass * self.g * track.lowest_centre(b) for k, b in enumerate(bodies) if k != n)
             return float((self.total_energy() - others) / (bodies[n].mass * self.g))
 
+    @property
+    def rough(self) -> bool:
+        """Whether friction is modelled (sliding particles, rolling bodies that can slip)."""
+        return self.track_friction is not None
+
+    @property
+    def static_coefficient(self):
+        """mu_s (mu where not given), or None on a smooth track."""
+        return self.track_friction if self.static_friction is None else self.static_friction
+
     def total_energy(self):
+        """The bodies' mechanical energy; a rolling body that starts slipping (slip w != 0) spins at
+        u = v - w instead of v: its kinetic energy of rotation is 1/2 m (kappa - 1) u^2."""
         with workprec():
-            return mpmath.fsum(self.body_energy(n) for n in range(len(self.bodies)))
+            total = mpmath.fsum(self.body_energy(n) for n in range(len(self.bodies)))
+            for n, w in enumerate(self.slip):
+                if w != 0:
+                    body = self.bodies[n]
+                    v = self.sigma(n) * self.dq[n]
+                    total += body.mass * (body.kappa - 1) * ((v - w) ** 2 - v**2) / 2
+            return total
 
     def describe(self) -> str:
         parts = ", ".join(b.describe() for b in self.bodies)

@@ -58,10 +58,14 @@ def link_function(system):
     return _compiled(("links", system.shape), outputs, system.variables, system.precision)
 
 
-def evaluate(function, state, pars):
-    """Call a compiled function on one state with the mode's parameters (numpy arrays of the run's type)."""
+def evaluate(function, state, pars, t=0.0):
+    """Call a compiled function on one state with the mode's parameters (numpy arrays of the run's type)
+    at time ``t`` (forced systems). A state without the slip velocities of a rough track's
+    rolling bodies (a full state, or a reduced one) is taken as rolling: slips 0."""
     state = np.asarray(state)
-    pars = np.asarray(pars)
+    if state.size < function.nvars:
+        state = np.concatenate([state, np.zeros(function.nvars - state.size, dtype=state.dtype)])
+    kwargs = {"time": t} if function.is_time_dependent else {}
     if function.nparams == 0:
-        return function(state)
-    return function(state, pars=pars[: function.nparams])
+        return function(state, **kwargs)
+    return function(state, pars=np.asarray(pars)[: function.nparams], **kwargs)

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..model.scene import Scene
 from .events import CollisionLog, StopRequest, mode_events, mode_handlers
+from .resolve.friction import FrictionState, initial_modes
 from .compiled_cache import CompiledCache
 from .precision import Precision
 from .result import SimulationResult, Status, passage_table
@@ -218,6 +219,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         log.on_passages_full = stream.flush_passages
 
     num = precision.number
+    friction = FrictionState(scene, precision, initial_modes(scene), [num(w) for w in scene.slip]) \
+        if scene.rough else None
     start = _start(scene, precision, pairs)
     units, first_system = start.units, start.system
     full_state = list(start.state)
@@ -244,7 +247,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         system = first_system if first else build_system(scene, precision, pairs=pairs, units=units)
         later_mode, first = not first, False
         holder: list = [None, None]
-        handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale, pieces)
+        handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale, pieces, friction)
         cooldown = precision.number(precision.epsilon * time_scale)
         # The first mode is compiled optimized; a later one (a cluster forming or splitting,
         # a body coming to rest) quickly first (see QUICK_STEPS), also when the optimized one is
@@ -256,7 +259,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         ta.pars[:] = params[: len(ta.pars)]  # heyoka keeps those up to the last one used
         if system.per_body and (system.links or any(u.pinned for u in units)):
             full_state = project_onto_contacts(system, full_state, params)
-        ta.state[:] = system.reduce(full_state)
+        ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_slip
         ta.dtime = t
         if slots:
             ta.reset_cooldowns()
@@ -272,7 +275,11 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         # open by a few ulps so that their events can see them close again.
         skip_merge = {n for n, c in enumerate(system.contacts) if c.pair_index == split_pair}
         split_pair = None
-        if settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge):
+        settled = settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
+        friction_modes = getattr(settle, "friction", None)
+        if friction_modes is not None:  # each unit's friction mode from the run's modes and the state now
+            friction_modes.start(ta, ta.state, ta.time)
+        if settled:
             full_state = system.expand(ta.state.tolist())
             modes[-1] = dataclasses.replace(modes[-1], state=tuple(full_state))
             overlap = _overlap(scene, precision, full_state, "at the start of a mode")
@@ -286,6 +293,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
                     None if system.per_body or system.n_units == len(scene.bodies) else system.expand, optimized)
                 steps += n_steps
         full_state = system.expand(ta.state.tolist())
+        if friction_modes is not None:
+            friction_modes.finish(ta.state)
         t = ta.dtime
         reason = log.stop.reason
         if reason in ("merge", "split", "release", "rest"):
@@ -393,6 +402,10 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         table_file=getattr(sink, "path", None) if sink is not None else None,
         contact_intervals=tuple(intervals),
         mode_changes=tuple(modes),
+        transitions=tuple(friction.transitions) if friction is not None else (),
+        final_modes=tuple(friction.modes) if friction is not None else (),
+        final_slip=tuple(friction.slips) if friction is not None else (),
+        strobe=tuple(log.strobe),
     )
 
 
@@ -607,7 +620,7 @@ def _track_limit_at_start(scene: Scene, system: SceneSystem, state) -> tuple[str
         where = f"at {c} = {float(state[k]):.17g}, d{c} = {float(state[n + k]):.17g}, t = 0 s"
         if scene.track_sides == "one" and normal < 0:
             return "left_track", f"body {k + 1} cannot stay on the one-sided track: its normal force N < 0 {where}"
-        if mu is not None and body.kappa > 1:
+        if mu is not None and body.kappa > 1 and not scene.rough:
             friction = driving * (1 - 1 / float(body.kappa))
             if abs(friction) > mu * normal:
                 return "slip", f"body {k + 1} slips from the start: the friction needed to roll exceeds mu N {where}"
@@ -628,7 +641,10 @@ def records_to_arrays(records: list, n_bodies: int) -> tuple:
     times = np.array([r[0] for r in records])
     numbers = np.array([r[1] for r in records], dtype=np.int64)
     flags = np.array([r[5] for r in records], dtype=np.int64)
-    before = np.array([r[2] for r in records]).reshape(n, 2 * nb)
+    try:
+        before = np.array([r[2] for r in records]).reshape(n, 2 * nb)
+    except ValueError:  # the fast path's states carry slip velocities after the rates (rough tracks)
+        before = np.array([r[2][: 2 * nb] for r in records]).reshape(n, 2 * nb)
     after = before.copy()
     fast = np.array([k for k, r in enumerate(records) if r[3] is not None], dtype=np.int64)
     if fast.size:

@@ -97,6 +97,10 @@ class CollisionLog:
     passages_flushed: int = 0
     limiter_impacts: int = 0
     on_passages_full: object = None
+    #: Changes of friction mode so far (rough tracks; the rows are in the run's FrictionState),
+    #: and the stroboscopic section's samples: (t, full state) once a forcing period.
+    friction_transitions: int = 0
+    strobe: list = field(default_factory=list)
 
     def record_passage(self, row: tuple) -> bool:
         """Keep a passage (see ``passages``); False: max_events is reached, the run stops."""
@@ -113,12 +117,14 @@ class CollisionLog:
 
     def events_exhausted(self) -> bool:
         """Whether collisions, passages and mode changes together reached max_events (sets the stop)."""
-        if self.max_events is None or self.count + self.n_passages + self.mode_changes < self.max_events:
+        if self.max_events is None or (self.count + self.n_passages + self.mode_changes + self.friction_transitions
+                                       + len(self.strobe)) < self.max_events:
             return False
         self.stop.reason = "max_events"
         self.stop.message = (f"stopped after max_events = {self.max_events} events ({self.count} collisions, "
                              f"{self.n_passages} junction passages and limiter impacts, {self.mode_changes} "
-                             "contact mode changes); raise it with --max-events N (RunOptions.max_events)")
+                             f"contact mode changes, {self.friction_transitions} friction mode changes, "
+                             f"{len(self.strobe)} stroboscopic samples); raise it with --max-events N (RunOptions.max_events)")
         return True
 
     @property
@@ -127,7 +133,7 @@ class CollisionLog:
 
 
 def mode_handlers(
-    scene, system: SceneSystem, log: CollisionLog, holder: list, time_scale: float, pieces=None
+    scene, system: SceneSystem, log: CollisionLog, holder: list, time_scale: float, pieces=None, friction=None
 ) -> tuple[list, list, object]:
     """The callbacks of one contact mode, in the order of :func:`mode_events`.
 
@@ -137,9 +143,12 @@ def mode_handlers(
     ``holder[1]`` to its parameters (views into heyoka's buffers) before
     integrating; the handlers use them to avoid re-wrapping the buffers at
     every collision. ``pieces`` (open tracks): the piece each body is on.
+    ``friction`` (rough tracks): the run's resolve.friction.FrictionState; the mode's
+    FrictionModes is then ``settle.friction``.
     """
     if not system.linear_gap:
-        return _local_handlers(scene, system, log, holder, time_scale, pieces)
+        return _with_friction(scene, system, log, holder, friction,
+                              *_local_handlers(scene, system, log, holder, time_scale, pieces))
     fast = not any(u.is_cluster for u in system.units)
     handlers: list = []
     resolvers: list = []
@@ -157,7 +166,46 @@ def mode_handlers(
             handler = _make_unit_callback(scene, system, number, log, holder, time_scale, settle, touched)
             resolvers.append(handler.resolve)
         handlers.append(handler)
-    return _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, settle)
+    return _with_friction(scene, system, log, holder, friction,
+                          *_other_handlers(scene, system, log, holder, time_scale, pieces, handlers, settle))
+
+
+def _with_friction(scene, system, log, holder, friction, handlers, warnings, settle):
+    """Friction events' handlers after the others (mode_events' order); impacts (collisions,
+    limiters) wrapped so that each unit's friction mode follows its new rate; the
+    stroboscopic samples of a forced run."""
+    if system.strobe_expression is not None:
+        warnings = warnings + [_strobe_recorder(log, system)]
+    if not system.friction_blocks:
+        return handlers, warnings, settle
+    from .resolve.friction import FrictionModes
+
+    modes = FrictionModes(scene, system, friction, holder, log)
+    n_impacts = len(system.contacts) + len(system.link_expressions) + len(system.bound_expressions)
+
+    def wrapped(handler):
+        def on_impact(ta, d_sgn):
+            s = holder[0]
+            before = s.tolist()
+            go_on = handler(ta, d_sgn)
+            modes.reconcile(ta, s, ta.time, before)
+            return go_on
+
+        return on_impact
+
+    handlers = [wrapped(h) if n < n_impacts else h for n, h in enumerate(handlers)]
+    handlers += [modes.handler(ev) for ev in system.friction_events]
+    settle.friction = modes
+    return handlers, warnings, settle
+
+
+def _strobe_recorder(log, system):
+    """Once a forcing period (nu t + psi = 2 pi n): the full state, the stroboscopic section."""
+
+    def record(ta, t, d_sgn):
+        log.strobe.append((float(t), system.expand(ta.update_d_output(t).tolist())))
+
+    return record
 
 
 def _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, settle):
@@ -265,9 +313,28 @@ def mode_events(system: SceneSystem, cooldown, slots: list, nt_slots: list) -> t
         hy.t_event(x, callback=forward(n_before + n), direction=negative, **options)
         for n, x in enumerate(expressions)
     ]
+    # Friction modes (rough tracks): turning points, sticking, slipping and rolling again. The
+    # gated expressions are a constant 1 outside their mode; the cooldown as for collisions.
+    n_before += len(expressions)
+    events += [
+        hy.t_event(x, callback=forward(n_before + n), direction=_friction_direction(ev.kind), cooldown=cooldown,
+                   **options)
+        for n, (x, ev) in enumerate(zip(system.friction_expressions, system.friction_events))
+    ]
     nt_expressions = [x for x, ev in zip(system.track_expressions, system.track_events) if not ev.terminal]
     nt_events = [hy.nt_event(x, forward_nt(n), direction=negative, **options) for n, x in enumerate(nt_expressions)]
+    if system.strobe_expression is not None:
+        nt_events.append(hy.nt_event(system.strobe_expression, forward_nt(len(nt_events)),
+                                     direction=hy.event_direction.any, **options))
     return events, nt_events
+
+
+def _friction_direction(kind: str):
+    """Turning points, slips returning to 0 and the normal force changing sign: both ways;
+    a load reaching the static capacity: the margin falling through 0."""
+    if kind in ("turn", "reroll", "normal"):
+        return hy.event_direction.any
+    return hy.event_direction.negative
 
 
 def _track_warning(log, ev, system):

@@ -68,6 +68,9 @@ TABLE_COLUMNS = (
 PASSAGE_COLUMNS = ("n", "t", "body", "kind", "piece_from", "piece_to", "q", "dq_before", "dq_after")
 INTEGER_COLUMNS = ("n", "i", "j", "law_flag")
 
+#: Columns of the friction transitions table (rough tracks, see README).
+TRANSITION_COLUMNS = ("n", "t", "body", "from", "to", "q", "dq")
+
 #: law_flag values: which law resolved the collision.
 LAW_FLAGS = {0: "the scene's law", 1: "fallback: Newton's law on the gap rate (the scene's law left the bodies approaching)",
              2: "Newton's law on the gap rate between units (a cluster in persistent contact, or a body resting on a limiter, took part)"}
@@ -249,6 +252,13 @@ class SimulationResult:
     passage_counts: tuple | None = None
     #: With RunOptions(dense=True): (t0, t1, heyoka continuous output) per propagation.
     dense: tuple | None = None
+    #: Rough tracks: every change of a body's friction mode, (t, body (0-based), from, to, q, q')
+    #: (see transition_table); each body's mode and slip velocity w (m/s) at the end.
+    transitions: tuple = ()
+    final_modes: tuple = ()
+    final_slip: tuple = ()
+    #: Forced runs: the stroboscopic section, (t, full state) once a forcing period.
+    strobe: tuple = ()
 
     @property
     def success(self) -> bool:
@@ -317,11 +327,39 @@ class SimulationResult:
 
     @property
     def energy_initial(self) -> float:
-        return self.energy(self.initial_state)
+        return self.energy(self.initial_state) + self.slip_energy(self.initial_state, self.scene.slip)
 
     @property
     def energy_final(self) -> float:
-        return self.energy(self.final_state)
+        return self.energy(self.final_state) + self.slip_energy(self.final_state, self.final_slip)
+
+    def slip_energy(self, state, slip) -> float:
+        """The kinetic energy a slipping body's spin adds to (or takes from) its rolling energy:
+        1/2 m (kappa - 1) [(v - w)^2 - v^2], v = sigma q' (rough tracks; 0 when every body rolls)."""
+        total = 0.0
+        n = self.n_bodies
+        for k, w in enumerate(slip):
+            w = float(w)
+            if w == 0:
+                continue
+            body = self.scene.bodies[k]
+            v = float(self.scene.track.sigma(body, float(state[k]))) * float(state[n + k])
+            total += 0.5 * float(body.mass) * (float(body.kappa) - 1) * ((v - w) ** 2 - v * v)
+        return total
+
+    def transition_table(self) -> np.ndarray:
+        """Changes of friction mode, columns TRANSITION_COLUMNS (bodies from 1)."""
+        return transition_table(self.transitions)
+
+    @property
+    def strobe_table(self) -> np.ndarray:
+        """The stroboscopic section: rows t, q_1..q_N, dq_1..dq_N (float64)."""
+        n = self.n_bodies
+        out = np.zeros((len(self.strobe), 1 + 2 * n))
+        for r, (t, state) in enumerate(self.strobe):
+            out[r, 0] = t
+            out[r, 1:] = np.asarray(state[: 2 * n], dtype=float)
+        return out
 
     def collision_table(self, native: bool = False) -> np.ndarray:
         """One row per collision kept in memory, as a numpy structured array.
@@ -367,8 +405,25 @@ class SimulationResult:
             "law": self.scene.law.name,
             "restitution": float(self.scene.law.restitution),
             "contact_intervals": list(self.contact_intervals),
+            **self._friction_summary(),
             **self.settings,
         }
+
+    def _friction_summary(self) -> dict:
+        scene = self.scene
+        out = {}
+        if scene.rough:
+            out["friction"] = {
+                "mu": float(scene.track_friction), "mu_s": float(scene.static_coefficient),
+                "transitions": len(self.transitions),
+                "final_modes": [{"body": k + 1, "mode": m, "slip": float(w)}
+                                for k, (m, w) in enumerate(zip(self.final_modes, self.final_slip))],
+            }
+        if scene.forcing is not None:
+            f = scene.forcing
+            out["forcing"] = {"kind": f.kind, "amplitude": float(f.amplitude), "frequency": float(f.frequency),
+                              "phase": float(f.phase), "period": f.period, "strobe_samples": len(self.strobe)}
+        return out
 
 
 def passage_table(passages, first_number: int = 1) -> np.ndarray:
@@ -379,4 +434,14 @@ def passage_table(passages, first_number: int = 1) -> np.ndarray:
     table = np.zeros(len(passages), dtype=dtype)
     for n, (t, body, kind, p_from, p_to, q, v, v_new) in enumerate(passages):
         table[n] = (first_number + n, float(t), body + 1, kind, p_from + 1, p_to + 1, float(q), float(v), float(v_new))
+    return table
+
+
+def transition_table(transitions, first_number: int = 1) -> np.ndarray:
+    """Friction transitions -> structured array, columns TRANSITION_COLUMNS (mode names as text)."""
+    dtype = [("n", np.int64), ("t", np.float64), ("body", np.int64), ("from", "U8"), ("to", "U8"),
+             ("q", np.float64), ("dq", np.float64)]
+    table = np.zeros(len(transitions), dtype=dtype)
+    for n, (t, body, old, new, q, dq) in enumerate(transitions):
+        table[n] = (first_number + n, float(t), body + 1, old, new, float(q), float(dq))
     return table

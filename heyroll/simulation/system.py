@@ -36,6 +36,7 @@ the junction events switch.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import re
@@ -47,6 +48,7 @@ import mpmath
 from ..model._numbers import workprec
 from ..model.scene import ContactPair, Scene
 from ..model.tracks import Dynamics
+from .friction import build_friction, forcing_terms, friction_events, slides
 from .precision import Precision
 
 #: Interpenetration allowed before a run is declared failed (status overlap):
@@ -187,6 +189,19 @@ class SceneSystem:
     #: The circle in a fixed plane: the gap events fire both ways and a gap coming back up
     #: through zero is a missed collision (see events.reopening_check), instead of guard events.
     gap_reopening: bool = False
+    #: Friction (a rough track, see simulation.friction): the mode parameters of each unit,
+    #: its events (terminal) and expressions, and per block [load, static capacity, sigma].
+    friction_blocks: tuple = ()
+    friction_events: tuple = ()
+    friction_expressions: list = field(default_factory=list)
+    friction_values: list = field(default_factory=list)
+    #: Slip velocities of rolling bodies on a rough track: state entries after the rates.
+    n_slip: int = 0
+    #: The forcing's phase nu t + psi over 2 (sin of it is 0 once a period): the stroboscopic
+    #: section's event, or None.
+    strobe_expression: object = None
+    #: What else the compiled code depends on: friction (sides, frame), forcing (kind, bodies).
+    extra_shape: tuple = ()
 
     @property
     def per_body(self) -> bool:
@@ -218,6 +233,7 @@ class SceneSystem:
             tuple((e.body, e.kind, e.terminal) for e in self.track_events),
             self.precision.name,
             tuple((u.members, u.pinned) for u in self.units if u.pinned),
+            self.extra_shape,
         )
 
     @property
@@ -237,7 +253,10 @@ class SceneSystem:
                          for c in self.contacts)
 
     def acceleration_bound(self, unit: int) -> float:
-        """A bound on |psi''| of a unit on the circle in a fixed plane: sum W_k / sum G_k (|sin| <= 1)."""
+        """A bound on |psi''| of a unit on the circle in a fixed plane: sum W_k / sum G_k (|sin| <= 1);
+        none (inf) with friction or forcing."""
+        if self.friction_blocks or self.strobe_expression is not None:
+            return math.inf
         _, weights, total = self._unit_floats[unit]
         return sum(weights) / total
 
@@ -255,6 +274,8 @@ class SceneSystem:
 
     def expand(self, unit_state) -> list:
         """Full state [phi_1..phi_N, dphi_1..dphi_N] from a unit state."""
+        if self.n_slip:
+            unit_state = unit_state[: len(unit_state) - self.n_slip]
         if self.per_body or not any(u.is_cluster for u in self.units):
             return list(unit_state)
         nu = self.n_units
@@ -374,9 +395,17 @@ def build_system(
             blocks.append(PieceBlock(body=k, lower=first, first=first + 2, size=len(values)))
     dyn = Dynamics(g=g, frame=scene.frame, par=par)
 
-    def body_terms(k, q, v):
+    def body_terms(k, q, v, sliding=False):
+        """Body k's terms (forcing included); ``sliding``: its centre as a particle's (kappa = 1)."""
         block = blocks[k] if blocks else None
-        return track.terms(scene.bodies[k], q, v, dyn, lambda m: hy.par[block.first + m])
+        body = dataclasses.replace(scene.bodies[k], kappa=mpmath.mpf(1)) if sliding else scene.bodies[k]
+        term = track.terms(body, q, v, dyn, lambda m: hy.par[block.first + m])
+        return forcing_terms(scene, k, term, q, body.kappa, par)
+
+    rough = scene.rough
+    n_rolls = sum(1 for u in units if len(u.members) == 1 and not slides(scene.bodies[u.members[0]])) if rough else 0
+    slip_vars = _vars("w", n_rolls) if n_rolls else []
+    friction = None
 
     G = [track.generalized_mass(b) for b in scene.bodies] if track.linear_gap else []
     W = [track.weight_moment(b, g) for b in scene.bodies] if track.linear_gap else []
@@ -385,21 +414,77 @@ def build_system(
     with workprec():
         if per_body:
             terms = [body_terms(k, psi[k], dpsi[k]) for k in range(n)]
+        else:
+            for u, unit in enumerate(units):
+                if unit.is_cluster and not rough:  # a cluster's equation is its own (below)
+                    continue
+                for k, o in zip(unit.members, unit.offsets):
+                    terms[k] = body_terms(k, psi[u] + par(o) if unit.is_cluster else psi[u], dpsi[u])
+        if rough:
+            def coordinate(k):
+                return k if per_body else unit_of[k]
+
+            def position(k):
+                u = unit_of[k]
+                return psi[k] if per_body else (psi[u] + par(units[u].offsets[units[u].members.index(k)])
+                                               if units[u].is_cluster else psi[u])
+
+            friction = build_friction(
+                scene, units, per_body, terms,
+                lambda k: body_terms(k, position(k), dpsi[coordinate(k)], sliding=True),
+                position, lambda k: dpsi[coordinate(k)], par, slip_vars)
+            for k, acc in friction[1].items():
+                terms[k] = dataclasses.replace(terms[k], acceleration=acc)
+        if per_body:
             accelerations, links, link_exprs, link_terms = _constrained_accelerations(
                 scene, units, terms, psi, dpsi, par, events)
+            if rough:
+                for block in friction[0]:
+                    if len(block.members) > 1:  # a stuck cluster does not move, whatever its contacts
+                        for k in block.members:
+                            accelerations[k] = (1 - hy.par[block.stuck]) * accelerations[k]
         else:
             for u, unit in enumerate(units):
                 if not unit.is_cluster:
-                    k = unit.members[0]
-                    terms[k] = body_terms(k, psi[u], dpsi[u])
-                    acc = terms[k].acceleration
+                    acc = terms[unit.members[0]].acceleration
                 else:
                     total = mpmath.fsum(G[k] for k in unit.members)
                     acc = hy.sum([
                         -par(W[k] / total) * hy.sin(psi[u] + par(o)) for k, o in zip(unit.members, unit.offsets)
                     ])
+                    if rough:
+                        member_friction, stuck = friction[3][u]
+                        forces = [f for f in member_friction.values()]
+                        if forces:
+                            acc = acc + par(1 / total) * hy.sum(forces) if len(forces) > 1 \
+                                else acc + par(1 / total) * forces[0]
+                        acc = (1 - stuck) * acc
                 accelerations.append(acc)
     equations = [(psi[c], dpsi[c]) for c in range(nc)] + [(dpsi[c], accelerations[c]) for c in range(nc)]
+    friction_blocks, friction_events_, friction_exprs, friction_values = (), (), [], []
+    if rough:
+        blocks_f, _, slip_eqs, _, friction_values = friction
+        equations += slip_eqs
+        slip_index = {}
+        fixed = []
+        rolls_seen = 0
+        for block in blocks_f:
+            first = block.members[0]
+            rate = nc + (first if per_body else block.unit)
+            slip = -1
+            if block.rolls:
+                slip = 2 * nc + rolls_seen
+                slip_index[len(fixed)] = rolls_seen
+                rolls_seen += 1
+            fixed.append(dataclasses.replace(block, rate=rate, slip=slip))
+        friction_blocks = tuple(fixed)
+        if events:
+            evs, friction_exprs = friction_events(
+                scene, friction_blocks, friction_values,
+                lambda block: dpsi[block.rate - nc],
+                lambda b: slip_vars[slip_index[b]],
+                lambda block: terms[block.members[0]].normal)
+            friction_events_ = tuple(evs)
 
     def at(k):  # a body's place in the state
         return k if per_body else unit_of[k]
@@ -408,7 +493,8 @@ def build_system(
     # A guard event costs as much as the gap's own (measured: 2.7 us of 15 per collision on
     # the default scene). In a fixed plane the circle's |psi''| has a closed bound, with which
     # a gap coming back up through zero tells a missed collision from rounding: no guards there.
-    reopening = track.linear_gap and not scene.frame.rotating
+    # (Friction and forcing break the bound: guards there.)
+    reopening = track.linear_gap and not scene.frame.rotating and not rough and scene.forcing is None
     if nu > 1 and events:
         for a in range(nu):
             b = (a + 1) % nu
@@ -455,6 +541,7 @@ def build_system(
     for u, unit in enumerate(units):
         if per_body or not unit.is_cluster or not events:
             continue
+        member_friction, stuck = friction[3][u] if rough else ({}, None)
         partial = []
         # A contact splits where lambda_m falls below -SPLIT_ULPS ulps of the cluster's weight
         # moments, not at 0.0: between bodies of one stiffness g / (kappa rho) at one angle
@@ -466,8 +553,12 @@ def build_system(
             slack = SPLIT_ULPS * precision.epsilon * mpmath.fsum(W[k] for k in unit.members)
         for m, (k, o) in enumerate(zip(unit.members[:-1], unit.offsets[:-1])):
             partial.append(-par(W[k]) * hy.sin(psi[u] + par(o)) - par(G[k]) * accelerations[u])
+            if k in member_friction:
+                partial.append(member_friction[k])
             links.append(ContactLink(unit=u, position=m, pair_index=scene_pair_index(scene, k, unit.members[m + 1])))
-            link_exprs.append(hy.sum(list(partial) + [par(slack)]))
+            link = hy.sum(list(partial) + [par(slack)])
+            # A stuck cluster's contact forces are statically indeterminate: it splits once it moves.
+            link_exprs.append(link if stuck is None else (1 - stuck) * link + stuck)
 
     bound_events, bound_exprs = [], []
     release_events, release_exprs = [], []
@@ -490,6 +581,10 @@ def build_system(
                 bound_events.append(BoundEvent(k, "upper"))
                 bound_exprs.append(hy.par[blocks[k].lower + 1] - psi[at(k)])
 
+    strobe = None
+    if scene.forcing is not None and events:
+        # sin((nu t + psi)/2) vanishes once a forcing period, at nu t + psi = 2 pi n.
+        strobe = hy.sin(par(scene.forcing.frequency / 2) * hy.time + par(scene.forcing.phase / 2))
     track_units = singleton_units(n) if per_body else units
     track_events, track_exprs = (_track_events(scene, track_units, psi, dpsi, par, body_terms, terms)
                                  if events else ([], []))
@@ -506,9 +601,10 @@ def build_system(
         # which wants exactly those up to the last one used).
         used = [int(m) for eq in equations for m in re.findall(r"\bp(\d+)\b", str(eq[1]))]
         del params[max(used, default=-1) + 1:]
+    slip_start = [num(0)] * len(slip_vars)
     return SceneSystem(
         initial_state=(start + rates if per_body
-                       else [start[u.members[0]] for u in units] + [rates[u.members[0]] for u in units]),
+                       else [start[u.members[0]] for u in units] + [rates[u.members[0]] for u in units]) + slip_start,
         equations=equations,
         parameters=params,
         units=units,
@@ -530,7 +626,7 @@ def build_system(
         piece_blocks=tuple(blocks),
         contact_expressions=contact_exprs,
         body_expressions=body_exprs,
-        variables=psi + dpsi,
+        variables=psi + dpsi + slip_vars,
         track_shape=track_shape(track, scene.frame),
         linear_gap=track.linear_gap,
         particles=tuple(b.is_particle for b in scene.bodies),
@@ -539,6 +635,14 @@ def build_system(
         release_events=tuple(release_events),
         release_expressions=release_exprs,
         gap_reopening=reopening and bool(gaps),
+        friction_blocks=friction_blocks,
+        friction_events=friction_events_,
+        friction_expressions=friction_exprs,
+        friction_values=friction_values,
+        n_slip=len(slip_vars),
+        strobe_expression=strobe,
+        extra_shape=(rough, scene.track_sides if rough else "",
+                     None if scene.forcing is None else (scene.forcing.kind, scene.forcing.bodies)),
     )
 
 
@@ -706,7 +810,7 @@ def _track_events(scene: Scene, units, psi, dpsi, par, body_terms, free_terms):
     free-body forces (the contact force's share is not included; see README).
     """
     tr = scene.track
-    bounded = tr.linear_gap and not scene.frame.rotating
+    bounded = tr.linear_gap and not scene.frame.rotating and scene.forcing is None
     energy = scene.total_energy() if bounded else None
     mu = scene.track_friction
     events, exprs = [], []
@@ -720,7 +824,9 @@ def _track_events(scene: Scene, units, psi, dpsi, par, body_terms, free_terms):
                 # An open track in a fixed plane: where its centre can rise to, can N vanish?
                 height = scene.height_bound(k)
                 reach_top_half = height is None or not tr.holds_below(body, _with_margin(height))
-            slips = mu is not None and body.kappa > 1
+            # A free rolling body on a rough track slips and rolls again (simulation.friction); inside
+            # a cluster slipping is not modelled: the run stops there.
+            slips = mu is not None and body.kappa > 1 and unit.is_cluster
             if not (reach_top_half or slips):
                 continue
             terms = body_terms(k, psi[u] + par(o), dpsi[u]) if unit.is_cluster else free_terms[k]

@@ -91,7 +91,7 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
         # Resting on the stop: the rebounds left are below the run's resolution
         # while the track pushes the body onto it (as for a pair, events.below_resolution).
         if function is not None:
-            acc = evaluate(function, s, pars)[BODY_VALUES * k + 5]
+            acc = evaluate(function, s, pars, t)[BODY_VALUES * k + 5]
             away = float(v_new) if not upper else -float(v_new)
             pushed = float(acc) if not upper else -float(acc)
             if below_resolution(away, pushed, k_float, float(t), 1 + abs(float(q)), time_scale, eps):

@@ -1,0 +1,251 @@
+"""Changes of friction mode: turning points, sticking, restarts, slipping and rolling again.
+
+The modes and their equations are in :mod:`heyroll.simulation.friction`; the
+mode of each unit lives in runtime parameters, switched here, inside heyoka's
+event callbacks (the integration goes on: no recompilation, no restart). A
+run keeps every body's mode and slip velocity in a :class:`FrictionState`
+across contact modes, and every change of mode is a row of the transitions
+table (t, body, from, to, q, q').
+
+Decisions at an event are taken in the run's own number type from the
+compiled block values [load, static capacity mu_s N, sigma]:
+
+* turning point of a sliding unit (q' = 0): it sticks if |load| <= mu_s N, and the
+  rate is set to exactly 0; else it slides on in the direction of the load;
+* a stuck unit whose load reaches mu_s N: it slides in the load's direction;
+* a rolling body whose needed friction reaches mu_s N: it slips in that direction
+  (its slip w = 0 at that instant, then grows);
+* a slipping body whose slip returns to 0: it rolls if |F| <= mu_s N, else it slips
+  the other way.
+
+heyoka does not see a root of an event function that is exactly 0.0 at the
+start of a step (see events.contact_settler): a restart from rest (q' = 0) or
+from rolling (w = 0) is therefore not taken for a new turning point.
+"""
+
+from __future__ import annotations
+
+import heyoka as hy
+import numpy as np
+
+from ..compiled_cache import CompiledCache
+from ..contact_function import evaluate
+from ..friction import MODES
+
+_COMPILED = CompiledCache(64)
+
+#: Values per friction block in its compiled function: load, static capacity, sigma, N_in (signed).
+BLOCK_VALUES = 4
+
+
+class FrictionState:
+    """Every body's friction mode and slip velocity in a run (kept across contact modes)."""
+
+    def __init__(self, scene, precision, modes, slips):
+        self.scene = scene
+        self.modes = list(modes)
+        self.slips = list(slips)
+        self.transitions: list = []  # (t, body (0-based), from, to, q, q')
+        self.num = precision.number
+
+    def record(self, t, body, old, new, q, dq) -> None:
+        if old != new:
+            self.transitions.append((float(t), body, old, new, q, dq))
+            self.modes[body] = new
+
+
+def friction_function(system):
+    """``f(state, pars)``: BLOCK_VALUES numbers per friction block (see the module doc), or None."""
+    outputs = [x for values in system.friction_values for x in values]
+    if not outputs:
+        return None
+
+    def build():
+        precision = system.precision
+        options = {} if precision.name == "double" else {"fp_type": precision.fp_type}
+        if precision.name.startswith("mp:"):
+            options["prec"] = precision.bits
+        return hy.cfunc(outputs, vars=system.variables, **options)
+
+    return _COMPILED.get(("friction", system.shape), build)
+
+
+def block_mode(system, block, pars) -> str:
+    if block.rolls:
+        if pars[block.rolling] == 1:
+            return "rolling"
+    elif pars[block.stuck] == 1:
+        return "stuck"
+    return "sliding+" if pars[block.sign] > 0 else "sliding-"
+
+
+class FrictionModes:
+    """The friction callbacks of one contact mode (see :func:`make_friction_handlers`)."""
+
+    def __init__(self, scene, system, state: FrictionState, holder, log):
+        self.scene, self.system, self.state, self.holder, self.log = scene, system, state, holder, log
+        self.function = friction_function(system)
+        self.num = system.precision.number
+        self.zero, self.one = self.num(0), self.num(1)
+
+    # -- parameters ----------------------------------------------------------------------
+
+    def _set(self, ta, index, value) -> None:
+        self.holder[1][index] = value
+        kept = ta.pars
+        if index < len(kept):
+            kept[index] = value
+
+    def _evaluate(self, s, t):
+        return evaluate(self.function, s, self.holder[1], t)
+
+    def _where(self, s, k):
+        full = self.system.expand(list(s))
+        n = self.system.n_bodies
+        return full[k], full[n + k]
+
+    def _note(self, t, s, block, new: str, record: bool = True) -> None:
+        """The block's members pass to mode ``new`` (rolling members of a cluster roll, or are stuck)."""
+        for k in block.members:
+            target = new
+            if not block.rolls and self.scene.bodies[k].kappa != 1:
+                target = "stuck" if new == "stuck" else "rolling"
+            if record:
+                q, dq = self._where(s, k)
+                self.state.record(t, k, self.state.modes[k], target, q, dq)
+            self.state.modes[k] = target
+
+    def apply(self, ta, block, mode: str) -> None:
+        """Set the block's parameters for ``mode``."""
+        if block.rolls:
+            self._set(ta, block.rolling, self.one if mode == "rolling" else self.zero)
+        else:
+            self._set(ta, block.stuck, self.one if mode == "stuck" else self.zero)
+        if mode in ("sliding+", "sliding-"):
+            self._set(ta, block.sign, self.one if mode == "sliding+" else -self.one)
+
+    # -- decisions -------------------------------------------------------------------------
+
+    def _holds(self, s, t, b) -> tuple[bool, float]:
+        """(static friction holds the block, the load's sign) at state s."""
+        values = self._evaluate(s, t)
+        load, capacity = values[BLOCK_VALUES * b], values[BLOCK_VALUES * b + 1]
+        return abs(load) <= capacity, (1 if load > 0 else -1)
+
+    def at_rest(self, ta, s, t, b) -> str:
+        """A unit at rest (particle: q' = 0; rolling body: w = 0): the mode it takes now."""
+        block = self.system.friction_blocks[b]
+        holds, direction = self._holds(s, t, b)
+        if block.rolls:
+            s[block.slip] = self.zero
+            return "rolling" if holds else ("sliding+" if direction > 0 else "sliding-")
+        for k in block.members:
+            s[self.system.state_index(k) + self.system.n_coordinates] = self.zero
+        return "stuck" if holds else ("sliding+" if direction > 0 else "sliding-")
+
+    def handler(self, event):
+        b = event.block
+        block = self.system.friction_blocks[b]
+        kind = event.kind
+
+        def on_event(ta, d_sgn):
+            s = self.holder[0]
+            t = ta.time
+            old = block_mode(self.system, block, self.holder[1])
+            if kind == "normal":
+                self._set(ta, block.side, self.one if d_sgn > 0 else -self.one)
+                return True
+            if kind in ("turn", "reroll"):
+                if old in ("stuck", "rolling"):
+                    return True
+                # A true turning point (or slip returning to 0) crosses zero against the motion. A
+                # restart from rest leaves zero along it: heyoka can report that start as a root
+                # (measured: a release at once followed by a "turning point" at the same instant).
+                if d_sgn == (1 if old == "sliding+" else -1):
+                    return True
+                new = self.at_rest(ta, s, t, b)
+            elif kind in ("release+", "slip+"):
+                new = "sliding+"
+            else:  # release-, slip-
+                new = "sliding-"
+            self.apply(ta, block, new)
+            self._note(t, s, block, new)
+            self.log.friction_transitions += 1
+            return not self.log.events_exhausted()
+
+        return on_event
+
+    def reconcile(self, ta, s, t, before) -> None:
+        """After impacts (collisions, limiters) that changed rates from ``before``: each block's
+        mode follows its new rate; a slipping body's spin is unchanged by an impulse through its
+        centre, so its slip changes by sigma times the change of q'."""
+        system = self.system
+        pars = self.holder[1]
+        values = None
+        for b, block in enumerate(system.friction_blocks):
+            old_rate, rate = before[block.rate], s[block.rate]
+            if old_rate == rate:
+                continue
+            old = block_mode(system, block, pars)
+            if block.rolls:
+                if old == "rolling":
+                    continue
+                if values is None:
+                    values = self._evaluate(s, t)
+                sigma = values[BLOCK_VALUES * b + 2]
+                s[block.slip] = s[block.slip] + sigma * (rate - old_rate)
+                w = s[block.slip]
+                new = self.at_rest(ta, s, t, b) if w == 0 else ("sliding+" if w > 0 else "sliding-")
+            elif rate == 0:
+                new = self.at_rest(ta, s, t, b)
+            else:
+                new = "sliding+" if rate > 0 else "sliding-"
+            if new != old:
+                self.apply(ta, block, new)
+                self._note(t, s, block, new)
+                self.log.friction_transitions += 1
+
+    def start(self, ta, s, t, record: bool = True) -> None:
+        """At the start of a contact mode: the blocks' parameters from the run's modes and state
+        (``record``: changes are transitions; not at the run's start, where they are the initial modes)."""
+        system = self.system
+        for b, block in enumerate(system.friction_blocks):
+            first = block.members[0]
+            if block.rolls:
+                s[block.slip] = self.state.slips[first]
+                w = s[block.slip]
+                # Slipping on, or rolling if static friction holds it (at the run's start: a body
+                # set rolling where rolling needs more than mu_s N slips from t = 0).
+                mode = ("sliding+" if w > 0 else "sliding-") if w != 0 else self.at_rest(ta, s, t, b)
+            else:
+                rate = s[block.rate]
+                if rate != 0:
+                    mode = "sliding+" if rate > 0 else "sliding-"
+                else:
+                    mode = self.at_rest(ta, s, t, b)
+            if block.side >= 0:  # the side a two-sided track pushes from
+                normal = self._evaluate(s, t)[BLOCK_VALUES * b + 3]
+                self._set(ta, block.side, -self.one if normal < 0 else self.one)
+            self.apply(ta, block, mode)
+            self._note(t, s, block, mode, record)
+
+    def finish(self, s) -> None:
+        """Keep the slip velocities for the next contact mode."""
+        for block in self.system.friction_blocks:
+            if block.rolls:
+                self.state.slips[block.members[0]] = s[block.slip]
+
+
+def initial_modes(scene) -> list[str]:
+    """Before the first step every body is taken as rolling (a rolling body) or sliding in the
+    direction of its rate; FrictionModes.start settles the rest from the state."""
+    out = []
+    for k, body in enumerate(scene.bodies):
+        if body.kappa != 1:
+            out.append("rolling" if scene.slip[k] == 0 else ("sliding+" if scene.slip[k] > 0 else "sliding-"))
+        else:
+            out.append("sliding+" if scene.dq[k] > 0 else "sliding-" if scene.dq[k] < 0 else "stuck")
+    return out
+
+
+__all__ = ["FrictionModes", "FrictionState", "MODES", "friction_function", "initial_modes"]
