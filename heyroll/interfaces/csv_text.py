@@ -53,7 +53,7 @@ def _rows_by_value(table: np.ndarray, format_value) -> bytes:
     """One number at a time in Python (object columns; ~0.4 us a double)."""
     formatters = []
     for name in table.dtype.names:
-        if table.dtype[name].kind in "iu":
+        if table.dtype[name].kind in "iuU":  # integers, and text (the friction modes)
             formatters.append(str)
         elif table.dtype[name] == object:
             formatters.append(format_value)

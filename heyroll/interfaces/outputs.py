@@ -185,8 +185,9 @@ def summary_dict(result: SimulationResult, *, scene_source: str, files: dict) ->
 
 
 #: The files a run writes (and their temporary names): what a new run in the same directory replaces.
-RUN_FILES = ("collisions.csv", "collisions.npy", "collisions.parquet", "passages.csv", "summary.json",
-             "phase_portrait.png", "energy.png")
+RUN_FILES = ("collisions.csv", "collisions.npy", "collisions.parquet", "passages.csv", "transitions.csv",
+             "stroboscopic.csv", "summary.json", "phase_portrait.png", "energy.png", "friction_portrait.png",
+             "friction_energy.png", "stroboscopic.png")
 
 
 def writable_problem(out: Path) -> str | None:
@@ -243,6 +244,12 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
     elif result.scene.domain(0) is not None:  # a sink of the caller's that does not take them
         atomic_write_text(out_dir / "passages.csv", collisions_csv(result.passage_table()))
         files["passages"] = "passages.csv"
+    if result.scene.rough:  # every change of friction mode (see README, "Rough tracks")
+        atomic_write_text(out_dir / "transitions.csv", collisions_csv(result.transition_table()))
+        files["transitions"] = "transitions.csv"
+    if result.scene.forcing is not None:  # the stroboscopic section: one row per forcing period
+        atomic_write_text(out_dir / "stroboscopic.csv", collisions_csv(strobe_table(result)))
+        files["stroboscopic"] = "stroboscopic.csv"
     if figures:
         from .figures import run_figures
 
@@ -252,3 +259,16 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
     summary["table_rows"] = sink.rows
     atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2, allow_nan=True) + "\n")
     return summary
+
+
+def strobe_table(result: SimulationResult) -> np.ndarray:
+    """The stroboscopic section as a structured table: n, t, q_1..q_N, dq_1..dq_N."""
+    n = result.n_bodies
+    c = result.scene.coordinate
+    names = ["t"] + [f"{c}_{k + 1}" for k in range(n)] + [f"d{c}_{k + 1}" for k in range(n)]
+    rows = result.strobe_table
+    table = np.zeros(len(rows), dtype=[("n", np.int64)] + [(name, np.float64) for name in names])
+    table["n"] = np.arange(1, len(rows) + 1)
+    for col, name in enumerate(names):
+        table[name] = rows[:, col]
+    return table

@@ -16,24 +16,29 @@ from ..errors import SceneError, SceneFileError
 from ..model._numbers import is_finite, is_number, to_mpf, workprec
 from ..model.bodies import Body, parse_shape
 from ..model.laws import make_law
+from ..model.forcing import Forcing
 from ..model.frame import Frame
 from ..model.scene import STANDARD_GRAVITY, RunSettings, Scene
 from ..model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment, ThreeArcTrack
 
 #: "sweep": a scene file may hold the [sweep] table of `heyroll sweep` (heyroll.sweep.plan checks
 #: it); a single run ignores it.
-TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "frame", "sweep"}
-TRACK_KEYS = {"type", "radius", "friction", "sides"}
+TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "frame", "sweep", "forcing"}
+TRACK_KEYS = {"type", "radius", "friction", "static_friction", "sides"}
 TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs")
 #: Keys of each path track type (paper section 5).
 PATH_TRACK_KEYS = {
-    "curve": {"type", "y", "x_min", "x_max", "limiter_restitution", "sides", "friction"},
-    "arcs": {"type", "segments", "start_x", "start_y", "limiter_restitution", "sides", "friction"},
-    "three_arcs": {"type", "radius", "hump_radius", "beta", "limiter_restitution", "sides", "friction"},
+    "curve": {"type", "y", "x_min", "x_max", "limiter_restitution", "sides", "friction", "static_friction"},
+    "arcs": {"type", "segments", "start_x", "start_y", "limiter_restitution", "sides", "friction", "static_friction"},
+    "three_arcs": {"type", "radius", "hump_radius", "beta", "limiter_restitution", "sides", "friction",
+                   "static_friction"},
 }
 SEGMENT_KEYS = {"arc": {"kind", "radius", "side", "start", "end"}, "line": {"kind", "angle", "length"}}
 FRAME_KEYS = {"omega", "axis_x"}
-BODY_SHAPE_KEYS = {"shape", "kappa", "radius", "mass", "density"}
+#: slip: a rolling body's initial slip velocity w = v_C - r omega_P on a rough track (m/s, default 0: rolling).
+BODY_SHAPE_KEYS = {"shape", "kappa", "radius", "mass", "density", "slip"}
+#: [forcing] (see heyroll.model.forcing): kind = "force" | "base".
+FORCING_KEYS = {"kind", "amplitude", "frequency", "phase", "direction", "bodies"}
 BODY_KEYS = BODY_SHAPE_KEYS | {"phi", "dphi", "omega"}
 #: Where a body starts on a path track: curve (contact abscissa x and its
 #: rate), arc chain (arc length s of the centre's path, or a segment and the
@@ -104,7 +109,25 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
     return Scene.make(
         track, bodies, phis, dphis, law=law, g=g, run=settings, name=name,
         friction=friction, on_inconsistent=policy, track_sides=sides, frame=frame,
+        **_rough(data, track_table, bodies_data),
     )
+
+
+def _rough(data: dict, track_table: dict, bodies_data: list) -> dict:
+    """Static friction, initial slips and the [forcing] table (rough tracks, forced oscillators)."""
+    slips = [_number(entry, "slip", f"bodies[{n}]", default="0") for n, entry in enumerate(bodies_data, start=1)]
+    forcing = None
+    table = _table(data, "forcing", required=False)
+    if table:
+        _no_unknown(table, FORCING_KEYS, "forcing")
+        kind = table.get("kind", "force")
+        if not isinstance(kind, str):
+            raise SceneError("forcing.kind", "must be a string: force | base")
+        forcing = Forcing.make(
+            kind, _number(table, "amplitude", "forcing", required=True),
+            _number(table, "frequency", "forcing", required=True), _number(table, "phase", "forcing", default="0"),
+            _number(table, "direction", "forcing", default="0"), table.get("bodies"), n_bodies=len(bodies_data))
+    return {"static_friction": _number(track_table, "static_friction", "track"), "slip": slips, "forcing": forcing}
 
 
 def _frame(table: dict) -> Frame:
@@ -181,7 +204,8 @@ def _path_scene(data: dict, track_table: dict, name: str, g) -> Scene:
     return Scene.make(track, bodies, qs, dqs, law=law,
                       limiter_restitution=_number(track_table, "limiter_restitution", "track"),
                       frame=frame, g=g, run=settings, name=name, on_inconsistent=policy,
-                      track_sides=_sides(track_table), friction=_number(track_table, "friction", "track"))
+                      track_sides=_sides(track_table), friction=_number(track_table, "friction", "track"),
+                      **_rough(data, track_table, bodies_data))
 
 
 def _sides(table: dict) -> str:

@@ -259,7 +259,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         ta.pars[:] = params[: len(ta.pars)]  # heyoka keeps those up to the last one used
         if system.per_body and (system.links or any(u.pinned for u in units)):
             full_state = project_onto_contacts(system, full_state, params)
-        ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_slip
+        ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra
         ta.dtime = t
         if slots:
             ta.reset_cooldowns()
@@ -405,6 +405,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         transitions=tuple(friction.transitions) if friction is not None else (),
         final_modes=tuple(friction.modes) if friction is not None else (),
         final_slip=tuple(friction.slips) if friction is not None else (),
+        friction_work=tuple(friction.work) if friction is not None else (),
+        transition_work=tuple(friction.transition_work) if friction is not None else (),
         strobe=tuple(log.strobe),
     )
 

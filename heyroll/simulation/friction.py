@@ -68,6 +68,8 @@ class FrictionBlock:
     rolling: int = -1
     side: int = -1
     slip: int = -1
+    #: State index of the work friction has dissipated in this contact mode (J).
+    work: int = -1
 
 
 @dataclass(frozen=True)
@@ -108,7 +110,7 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
     mu = scene.track_friction
     mu_s = scene.static_coefficient
     two_sided_fixed = scene.track_sides == "two" and not scene.frame.rotating
-    blocks, body_acc, slip_eqs, unit_sums, values = [], {}, [], {}, []
+    blocks, body_acc, slip_eqs, unit_sums, values, work = [], {}, [], {}, [], []
     slips = iter(slip_vars)
     for u, unit in enumerate(units):
         members = unit.members
@@ -135,13 +137,15 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
             body_acc[k] = rolling * t_roll.acceleration + (1 - rolling) * sliding_acc
             w = next(slips)
             slip_eqs.append((w, (1 - rolling) * (t_slide.driving - sign * par(mu * boost) * n_mag)))
+            # The power friction takes: mu m N |w| while slipping (s w = |w|).
+            work.append((1 - rolling) * sign * par(mu * body.mass) * n_mag * w)
             blocks.append(FrictionBlock(unit=u, members=members, rate=-1, rolls=True, stuck=stuck_i, sign=sign_i,
                                         rolling=rolling_i, side=side_i, slip=-1))
             values.append([need, par(mu_s) * n_mag, t_roll.sigma, t_roll.normal])
             continue
         # Particles, and clusters: the members share the mode. Rolling members of a cluster roll
         # (their friction is internal to rolling); the particles' friction acts on the cluster.
-        loads, capacity, member_friction = [], [], {}
+        loads, capacity, member_friction, power = [], [], {}, []
         for k in members:
             body = scene.bodies[k]
             weight = par(body.mass) * terms[k].sigma  # generalized forces: force x sigma
@@ -149,6 +153,7 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
             if slides(body):
                 capacity.append(weight * normals[k])
                 member_friction[k] = -sign * par(mu * body.mass) * normals[k] * terms[k].sigma
+                power.append(-member_friction[k] * v_of(k))  # mu m N sigma |q'| (s q' = |q'|)
                 if per_body or len(members) == 1:
                     body_acc[k] = (1 - stuck) * (terms[k].acceleration - sign * par(mu) * normals[k] / terms[k].sigma)
             elif per_body or len(members) == 1:
@@ -157,10 +162,11 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
             unit_sums[u] = (member_friction, stuck)
         blocks.append(FrictionBlock(unit=u, members=members, rate=-1, rolls=False, stuck=stuck_i, sign=sign_i,
                                     side=side_i))
+        work.append((1 - stuck) * (hy.sum(power) if len(power) > 1 else power[0]) if power else par(0))
         values.append([hy.sum(loads) if len(loads) > 1 else loads[0],
                        par(mu_s) * (hy.sum(capacity) if len(capacity) > 1 else capacity[0]) if capacity else par(0),
                        terms[first].sigma, terms[first].normal])
-    return blocks, body_acc, slip_eqs, unit_sums, values
+    return blocks, body_acc, slip_eqs, unit_sums, values, work
 
 
 def _new_par(par, value) -> int:

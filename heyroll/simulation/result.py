@@ -257,6 +257,10 @@ class SimulationResult:
     transitions: tuple = ()
     final_modes: tuple = ()
     final_slip: tuple = ()
+    #: The work friction dissipated on each body (J; a cluster's on its first member), integrated
+    #: with the motion; per transition, the body's unit's total since t = 0 at that instant.
+    friction_work: tuple = ()
+    transition_work: tuple = ()
     #: Forced runs: the stroboscopic section, (t, full state) once a forcing period.
     strobe: tuple = ()
 
@@ -322,7 +326,9 @@ class SimulationResult:
             if np.any(sel):
                 values = np.asarray(c_out(np.clip(t[sel], t0, t1)), dtype=float)
                 # A mode with clusters on the circle integrates one angle per unit: back to every body.
-                out[sel] = values if expand is None else np.array([expand(row) for row in values.tolist()])
+                # (Rough tracks: slip velocities and friction work follow the rates: dropped here.)
+                out[sel] = values[:, : 2 * self.n_bodies] if expand is None else \
+                    np.array([expand(row) for row in values.tolist()])
         return t, out
 
     @property
@@ -416,6 +422,7 @@ class SimulationResult:
             out["friction"] = {
                 "mu": float(scene.track_friction), "mu_s": float(scene.static_coefficient),
                 "transitions": len(self.transitions),
+                "work": float(sum(self.friction_work)),
                 "final_modes": [{"body": k + 1, "mode": m, "slip": float(w)}
                                 for k, (m, w) in enumerate(zip(self.final_modes, self.final_slip))],
             }

@@ -195,8 +195,9 @@ class SceneSystem:
     friction_events: tuple = ()
     friction_expressions: list = field(default_factory=list)
     friction_values: list = field(default_factory=list)
-    #: Slip velocities of rolling bodies on a rough track: state entries after the rates.
-    n_slip: int = 0
+    #: State entries after the rates (rough tracks): the slip velocities of rolling bodies, then
+    #: the work friction has dissipated per block (FrictionBlock.slip, .work).
+    n_extra: int = 0
     #: The forcing's phase nu t + psi over 2 (sin of it is 0 once a period): the stroboscopic
     #: section's event, or None.
     strobe_expression: object = None
@@ -274,8 +275,8 @@ class SceneSystem:
 
     def expand(self, unit_state) -> list:
         """Full state [phi_1..phi_N, dphi_1..dphi_N] from a unit state."""
-        if self.n_slip:
-            unit_state = unit_state[: len(unit_state) - self.n_slip]
+        if self.n_extra:
+            unit_state = unit_state[: len(unit_state) - self.n_extra]
         if self.per_body or not any(u.is_cluster for u in self.units):
             return list(unit_state)
         nu = self.n_units
@@ -406,6 +407,7 @@ def build_system(
     n_rolls = sum(1 for u in units if len(u.members) == 1 and not slides(scene.bodies[u.members[0]])) if rough else 0
     slip_vars = _vars("w", n_rolls) if n_rolls else []
     friction = None
+    work_vars: list = []
 
     G = [track.generalized_mass(b) for b in scene.bodies] if track.linear_gap else []
     W = [track.weight_moment(b, g) for b in scene.bodies] if track.linear_gap else []
@@ -463,8 +465,9 @@ def build_system(
     equations = [(psi[c], dpsi[c]) for c in range(nc)] + [(dpsi[c], accelerations[c]) for c in range(nc)]
     friction_blocks, friction_events_, friction_exprs, friction_values = (), (), [], []
     if rough:
-        blocks_f, _, slip_eqs, _, friction_values = friction
-        equations += slip_eqs
+        blocks_f, _, slip_eqs, _, friction_values, powers = friction
+        work_vars = _vars("D", len(blocks_f))
+        equations += slip_eqs + list(zip(work_vars, powers))
         slip_index = {}
         fixed = []
         rolls_seen = 0
@@ -476,7 +479,8 @@ def build_system(
                 slip = 2 * nc + rolls_seen
                 slip_index[len(fixed)] = rolls_seen
                 rolls_seen += 1
-            fixed.append(dataclasses.replace(block, rate=rate, slip=slip))
+            fixed.append(dataclasses.replace(block, rate=rate, slip=slip,
+                                             work=2 * nc + len(slip_vars) + len(fixed)))
         friction_blocks = tuple(fixed)
         if events:
             evs, friction_exprs = friction_events(
@@ -601,7 +605,7 @@ def build_system(
         # which wants exactly those up to the last one used).
         used = [int(m) for eq in equations for m in re.findall(r"\bp(\d+)\b", str(eq[1]))]
         del params[max(used, default=-1) + 1:]
-    slip_start = [num(0)] * len(slip_vars)
+    slip_start = [num(0)] * (len(slip_vars) + len(work_vars))
     return SceneSystem(
         initial_state=(start + rates if per_body
                        else [start[u.members[0]] for u in units] + [rates[u.members[0]] for u in units]) + slip_start,
@@ -626,7 +630,7 @@ def build_system(
         piece_blocks=tuple(blocks),
         contact_expressions=contact_exprs,
         body_expressions=body_exprs,
-        variables=psi + dpsi + slip_vars,
+        variables=psi + dpsi + slip_vars + work_vars,
         track_shape=track_shape(track, scene.frame),
         linear_gap=track.linear_gap,
         particles=tuple(b.is_particle for b in scene.bodies),
@@ -639,7 +643,7 @@ def build_system(
         friction_events=friction_events_,
         friction_expressions=friction_exprs,
         friction_values=friction_values,
-        n_slip=len(slip_vars),
+        n_extra=len(slip_vars) + len(work_vars),
         strobe_expression=strobe,
         extra_shape=(rough, scene.track_sides if rough else "",
                      None if scene.forcing is None else (scene.forcing.kind, scene.forcing.bodies)),

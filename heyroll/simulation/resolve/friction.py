@@ -46,11 +46,16 @@ class FrictionState:
         self.modes = list(modes)
         self.slips = list(slips)
         self.transitions: list = []  # (t, body (0-based), from, to, q, q')
+        #: Per transition: the work friction had dissipated on the body's unit since t = 0 (J).
+        self.transition_work: list = []
+        #: Per body: the work friction dissipated in finished contact modes (a cluster's on its first member).
+        self.work = [0.0] * len(scene.bodies)
         self.num = precision.number
 
-    def record(self, t, body, old, new, q, dq) -> None:
+    def record(self, t, body, old, new, q, dq, work=0.0) -> None:
         if old != new:
             self.transitions.append((float(t), body, old, new, q, dq))
+            self.transition_work.append(work)
             self.modes[body] = new
 
 
@@ -112,7 +117,8 @@ class FrictionModes:
                 target = "stuck" if new == "stuck" else "rolling"
             if record:
                 q, dq = self._where(s, k)
-                self.state.record(t, k, self.state.modes[k], target, q, dq)
+                work = self.state.work[block.members[0]] + float(s[block.work])
+                self.state.record(t, k, self.state.modes[k], target, q, dq, work)
             self.state.modes[k] = target
 
     def apply(self, ta, block, mode: str) -> None:
@@ -211,6 +217,7 @@ class FrictionModes:
         system = self.system
         for b, block in enumerate(system.friction_blocks):
             first = block.members[0]
+            s[block.work] = self.zero
             if block.rolls:
                 s[block.slip] = self.state.slips[first]
                 w = s[block.slip]
@@ -232,6 +239,7 @@ class FrictionModes:
     def finish(self, s) -> None:
         """Keep the slip velocities for the next contact mode."""
         for block in self.system.friction_blocks:
+            self.state.work[block.members[0]] += float(s[block.work])
             if block.rolls:
                 self.state.slips[block.members[0]] = s[block.slip]
 
