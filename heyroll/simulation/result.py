@@ -315,10 +315,15 @@ class SimulationResult:
 
     def sample(self, n_points: int = 2000):
         """(t, states) on a uniform grid over the run, from the dense output (run with dense=True)."""
+        t = np.linspace(0.0, float(self.t_final), n_points)
+        return t, self.states_at(t)
+
+    def states_at(self, t) -> np.ndarray:
+        """Full states (float64, rows) at the ascending times ``t``, from the dense output (dense=True)."""
         if not self.dense:
             raise ValueError("run with RunOptions(dense=True) to sample the trajectory")
-        t = np.linspace(0.0, float(self.t_final), n_points)
-        out = np.empty((n_points, 2 * self.n_bodies))
+        t = np.asarray(t, dtype=float)
+        out = np.empty((t.size, 2 * self.n_bodies))
         starts = np.array([d[0] for d in self.dense])
         idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.dense) - 1)
         for k, (t0, t1, c_out, expand) in enumerate(self.dense):
@@ -329,7 +334,7 @@ class SimulationResult:
                 # (Rough tracks: slip velocities and friction work follow the rates: dropped here.)
                 out[sel] = values[:, : 2 * self.n_bodies] if expand is None else \
                     np.array([expand(row) for row in values.tolist()])
-        return t, out
+        return out
 
     @property
     def energy_initial(self) -> float:

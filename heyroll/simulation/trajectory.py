@@ -67,6 +67,8 @@ def sample_branches(result: SimulationResult, *, max_branches: int | None = None
         # drawn (measured before: the last branch ran without collisions to t_end, through the
         # other ball).
         breaks = breaks[:max_branches]
+    if scene.rough or scene.forcing is not None:
+        return _dense_branches(result, breaks, ends, points, t_stop)
     integrators: dict = {}
     branches = []
     for n, (t0, state, _) in enumerate(breaks):
@@ -85,4 +87,20 @@ def sample_branches(result: SimulationResult, *, max_branches: int | None = None
         out = np.array(ta.propagate_grid(grid)[-1], dtype=float)
         full = np.array([system.expand(row) for row in out.tolist()])
         branches.append(Branch(times=grid, states=full))
+    return branches
+
+
+def _dense_branches(result, breaks, ends, points, t_stop) -> list[Branch]:
+    """Rough tracks and forced runs: the motion between collisions also depends on each body's
+    friction mode and on time, so the branches are read from the run's dense output (the run is
+    repeated in double with dense output where it was not kept)."""
+    if not result.dense:
+        from .driver import simulate
+
+        result = simulate(result.scene, t_end=t_stop, max_collisions=None, dense=True)
+    branches = []
+    for n, (t0, _state, _) in enumerate(breaks):
+        t1 = ends[n]
+        grid = np.unique(np.linspace(t0, t1, points)) if t1 > t0 else np.array([t0])
+        branches.append(Branch(times=grid, states=result.states_at(grid)))
     return branches

@@ -71,16 +71,19 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         # itself is most of the ~4 us a compiled-function evaluation costs from Python).
         buffer = np.empty(function.nouts)
         npar = function.nparams
+        timed = function.is_time_dependent  # a forced system: the gap's acceleration depends on t
 
-        def values(s, pars):
-            if npar:
+        def values(s, pars, t=0.0):
+            if timed:
+                function(s, pars=pars[:npar], outputs=buffer, time=t)
+            elif npar:
                 function(s, pars=pars[:npar], outputs=buffer)
             else:
                 function(s, outputs=buffer)
             return buffer[base:base + CONTACT_VALUES].tolist()
     else:
-        def values(s, pars):
-            return evaluate(function, s, pars)[base:base + CONTACT_VALUES].tolist()
+        def values(s, pars, t=0.0):
+            return evaluate(function, s, pars, t)[base:base + CONTACT_VALUES].tolist()
 
     seen: list = []  # what resolve saw: gap'', gradient, metrics and rates before the collision
     # below_resolution holds only if v^2 <= 2 A h_res or v <= A (1 - k) t_res / 2 (see on_collision).
@@ -91,7 +94,7 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
     curvature_scale = float(d) if d > 0 else length / 1000
 
     def resolve(s, t, pars) -> bool:
-        _gap, gi, gj, si, sj, acc, _jerk = values(s, pars)
+        _gap, gi, gj, si, sj, acc, _jerk = values(s, pars, t)
         vi, vj = s[nu + a], s[nu + b]
         seen[:] = (float(acc), gi, gj, float(si), float(sj), float(vi), float(vj))
         if held is not None:
@@ -169,7 +172,7 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         scale = 1 + abs(float(s[a])) + abs(float(s[b]))
         if opening * opening > bound * h_bound * scale and opening > bound * t_bound * (abs(float(t)) + time_scale):
             return close_collision(log, number, False)
-        _gap, gi, gj, _si, _sj, acc, jerk = values(s, pars)
+        _gap, gi, gj, _si, _sj, acc, jerk = values(s, pars, t)
         opening = min(float(gi * s[nu + a] + gj * s[nu + b]), bounce)
         return close_collision(log, number,
                                below_resolution(opening, float(acc), k, float(t), scale, time_scale, eps, float(jerk)))
@@ -202,9 +205,9 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
         by_unit.setdefault(b, []).append(number)
     max_rounds = 64 * system.n_bodies
 
-    def values(s, number):
+    def values(s, number, t=0.0):
         base = CONTACT_VALUES * number
-        return evaluate(function, s, holder[1])[base:base + CONTACT_VALUES].tolist()
+        return evaluate(function, s, holder[1], t)[base:base + CONTACT_VALUES].tolist()
 
     def touching_elsewhere(s) -> list:
         """Every pair whose gap is within resolution (one evaluation for all): disjoint pairs of a
@@ -228,7 +231,7 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
             unit = pending.pop()
             for number in by_unit.get(unit, ()):
                 a, b = where[number]
-                gap, gi, gj, _si, _sj, acc, jerk = values(s, number)
+                gap, gi, gj, _si, _sj, acc, jerk = values(s, number, t)
                 scale = 1 + abs(float(s[a])) + abs(float(s[b]))
                 if abs(float(gap)) > RESOLUTION_ULPS * eps * scale:
                     continue

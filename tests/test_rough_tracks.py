@@ -1,0 +1,379 @@
+"""Rough tracks (paper section 2, issue 15): sliding, sticking, slipping and rolling again, forcing.
+
+The engine against closed forms from the independent reference
+(heyroll.reference.rough, mpmath) and against conservation laws: the
+change of mechanical energy over each branch equals minus the friction
+work integrated with the motion, mu = 0 reproduces the smooth runs.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import subprocess
+import sys
+
+import mpmath
+import numpy as np
+import pytest
+
+from heyroll.errors import SceneError
+from heyroll.interfaces.scene_file import parse_scene
+from heyroll.model.bodies import Body
+from heyroll.model.forcing import Forcing
+from heyroll.model.frame import Frame
+from heyroll.model.laws import make_law
+from heyroll.model.scene import RunSettings, Scene
+from heyroll.model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment, first_integral
+from heyroll.reference import rough
+from heyroll.simulation.driver import simulate
+from heyroll.simulation.result import Status
+
+G = "9.81"
+PARTICLE = Body.of_shape("particle", 0, mass=1)
+DISK = Body.of_shape("disk", "0.1", mass=1)
+
+
+def incline(slope: str, lo=-10, hi=10) -> CurveTrack:
+    return CurveTrack.make(f"{slope}*x", lo, hi)
+
+
+def body_energy(result, k, q, dq) -> float:
+    s = result.scene
+    return float(first_integral(s.track, s.bodies[k], q, dq, s.g, s.frame))
+
+
+# -- a particle on a straight rough incline ---------------------------------------------------------
+
+
+@pytest.mark.parametrize("slope, mu_s, sticks", [("0.3", "0.5", True), ("0.6", "0.5", False)])
+def test_a_particle_launched_up_an_incline_stops_where_the_closed_form_says_and_sticks_iff_tan_alpha_le_mu_s(
+        slope, mu_s, sticks):
+    mu = "0.2"
+    scene = Scene.make(incline(slope), [PARTICLE], [0], [2], friction=mu, static_friction=mu_s, track_sides="one",
+                       run=RunSettings.make(2))
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED
+    alpha = mpmath.atan(mpmath.mpf(slope))
+    ref = rough.incline_sliding(alpha, mu, mu_s, 0, 2, G, 2)
+    assert [(r[2], r[3]) for r in result.transitions] == [(t.mode_from, t.mode_to) for t in ref.transitions]
+    assert (ref.transitions[0].mode_to == "stuck") is sticks
+    for row, t in zip(result.transitions, ref.transitions):
+        assert row[0] == pytest.approx(float(t.t), abs=2e-15)
+        assert float(row[4]) == pytest.approx(float(t.x), abs=2e-15)
+        assert float(row[5]) == 0.0  # the rate is exactly zero at a turning point
+    assert float(result.final_state[0]) == pytest.approx(float(ref.x), abs=1e-13)
+    assert float(result.final_state[1]) == pytest.approx(float(ref.dx), abs=1e-13)
+    assert result.final_modes == (ref.mode,)
+
+
+def test_a_particle_released_at_rest_on_an_incline_slides_iff_tan_alpha_exceeds_mu_s():
+    for slope, expected in (("0.49", "stuck"), ("0.51", "sliding-")):
+        scene = Scene.make(incline(slope), [PARTICLE], [0], [0], friction="0.3", static_friction="0.5",
+                           track_sides="one", run=RunSettings.make("0.5"))
+        result = simulate(scene)
+        assert result.final_modes == (expected,)
+        moved = float(result.final_state[0]) != 0.0
+        assert moved is (expected != "stuck")
+
+
+# -- a particle on a rough circle ---------------------------------------------------------------------
+
+
+def test_a_particle_on_a_rough_circle_turns_where_the_closed_form_law_of_phi_dot_squared_says():
+    mu, mu_s = "0.1", "0.15"
+    scene = Scene.make(CircleTrack.of_radius(1), [PARTICLE], [0], [4], friction=mu, static_friction=mu_s,
+                       track_sides="one", run=RunSettings.make(20))
+    result = simulate(scene)
+    ref = rough.circle_sliding_sequence(0, 4, mu, mu_s, 1, G)
+    assert ref.status == "stuck"
+    assert len(result.transitions) == len(ref.transitions) >= 4
+    for row, t in zip(result.transitions, ref.transitions):
+        assert (row[2], row[3]) == (t.mode_from, t.mode_to)
+        assert row[0] == pytest.approx(float(t.t), rel=1e-14, abs=1e-14)
+        assert float(row[4]) == pytest.approx(float(t.phi), abs=1e-14)
+    # the final sticking band |tan phi| <= mu_s, and nothing moves afterwards
+    phi_end = float(result.final_state[0])
+    assert abs(math.tan(phi_end)) <= 0.15 and result.final_modes == ("stuck",)
+    assert float(result.final_state[1]) == 0.0
+
+
+def test_the_energy_lost_on_every_branch_is_the_friction_work_to_round_off():
+    scene = Scene.make(CircleTrack.of_radius(1), [PARTICLE], [0], [4], friction="0.1", static_friction="0.15",
+                       track_sides="one", run=RunSettings.make(20))
+    result = simulate(scene)
+    energies = [body_energy(result, 0, 0, 4)] + [body_energy(result, 0, r[4], r[5]) for r in result.transitions]
+    work = [0.0] + list(result.transition_work)
+    for k in range(1, len(energies)):
+        lost, dissipated = energies[k - 1] - energies[k], work[k] - work[k - 1]
+        assert dissipated > 0
+        assert lost == pytest.approx(dissipated, rel=1e-13, abs=1e-14)
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work), rel=1e-13)
+    ref = rough.circle_sliding_sequence(0, 4, "0.1", "0.15", 1, G)
+    for branch, k in zip(ref.branches, range(1, len(work))):
+        assert work[k] - work[k - 1] == pytest.approx(float(-branch.friction_work if branch.friction_work < 0
+                                                            else branch.friction_work), rel=1e-12)
+
+
+def test_two_particles_on_a_rough_circle_account_for_every_joule():
+    """Friction work plus the impacts' losses is the whole loss; a stuck particle that is hit slides."""
+    scene = Scene.make(CircleTrack.of_radius(1), [PARTICLE, Body.of_shape("particle", 0, mass=2)], [-0.5, 0.8],
+                       [3, 0], law=make_law("newton", "0.7"), friction="0.1", static_friction="0.2",
+                       run=RunSettings.make(10))
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED and result.n_collisions >= 2
+    table = result.collision_table()
+    impacts = float((table["energy_before"] - table["energy_after"]).sum())
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work) + impacts,
+                                                                        rel=1e-12)
+    hit = [r for r in result.transitions if r[2] == "stuck" and r[0] in set(table["t"].tolist())]
+    assert hit, "a stuck particle hit by the other must start sliding at the collision"
+    assert result.final_modes == ("stuck", "stuck")
+
+
+# -- rolling bodies that slip ---------------------------------------------------------------------------
+
+
+def test_a_disk_thrown_without_spin_slips_then_rolls_at_the_closed_form_time_and_speed():
+    # an incline of slope 0.2 (alpha > 0: uphill is +x); the disk moves uphill with v0 and no spin
+    slope, mu = "0.2", "0.3"
+    alpha = mpmath.atan(mpmath.mpf(slope))
+    dx0 = "2"
+    v0 = mpmath.mpf(dx0) / mpmath.cos(alpha)  # along the slope
+    scene = Scene.make(incline(slope), [DISK], [0], [dx0], slip=[float(v0)], friction=mu, track_sides="one",
+                       run=RunSettings.make(1))
+    result = simulate(scene)
+    ref = rough.incline_slip_then_roll(alpha, mu, mu, "1.5", v0, 0, G)
+    assert ref.mode_after == "rolling"
+    (row,) = [r for r in result.transitions if r[3] == "rolling"]
+    assert row[0] == pytest.approx(float(ref.t_star), rel=1e-14)
+    assert float(row[5]) / math.cos(float(alpha)) == pytest.approx(float(ref.v_star), rel=1e-13)
+    assert result.energy_initial - result.energy_final == pytest.approx(float(ref.friction_loss), rel=1e-12)
+
+
+@pytest.mark.parametrize("slope", ["0.5", "1.2"])
+def test_a_disk_released_on_an_incline_rolls_iff_the_friction_it_needs_is_within_mu_s_n(slope):
+    mu = "0.2"
+    alpha = mpmath.atan(mpmath.mpf(slope))
+    ref = rough.incline_roll_from_rest(alpha, mu, mu, "1.5", G)
+    scene = Scene.make(incline(slope), [DISK], [0], [0], friction=mu, track_sides="one", run=RunSettings.make("0.5"))
+    result = simulate(scene)
+    assert result.final_modes == (ref.mode,)
+    t = 0.5
+    if ref.mode == "rolling":
+        x = -0.5 * 9.81 * math.sin(float(alpha)) / 1.5 * t * t * math.cos(float(alpha))
+        assert float(result.final_slip[0]) == 0.0
+    else:
+        x = 0.5 * float(ref.dv) * t * t * math.cos(float(alpha))
+        assert float(result.final_slip[0]) == pytest.approx(float(ref.dw) * t, rel=1e-12)
+    assert float(result.final_state[0]) == pytest.approx(x, rel=1e-12)
+
+
+# -- mu = 0 and the smooth engine --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("track, q, dq", [
+    (CircleTrack.of_radius(1), [-0.5, 0.8], [3, 0]),
+    (CurveTrack.make("x**2/2", -2, 2), [-0.5, 0.8], [2, 0]),
+])
+def test_friction_zero_reproduces_the_smooth_track(track, q, dq):
+    law = make_law("newton", "0.8")
+    smooth = simulate(Scene.make(track, [PARTICLE, PARTICLE], q, dq, law=law, run=RunSettings.make(4)))
+    rough_run = simulate(Scene.make(track, [PARTICLE, PARTICLE], q, dq, law=law, friction=0,
+                                    run=RunSettings.make(4)))
+    assert smooth.n_collisions == rough_run.n_collisions >= 2
+    np.testing.assert_allclose(rough_run.times, smooth.times, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(rough_run.final_state, smooth.final_state, rtol=0, atol=1e-11)
+    assert sum(rough_run.friction_work) == 0.0
+
+
+def test_a_relative_equilibrium_of_a_turning_plane_holds_with_friction_zero_and_sticks_nearby_with_friction():
+    from heyroll.analysis.equilibria import find_equilibria, problem_of
+
+    track = CurveTrack.make("0.5*x**2*(x**2 - 1)**2", "-1.6", "1.6")  # section 5.3's curve (examples/)
+    frame = Frame.make("3", 0)
+    probe = Scene.make(track, [PARTICLE], ["0.1"], [0], frame=frame)
+    centres = [e for e in find_equilibria(problem_of(probe)) if e.type == "center" and e.x > 0.01]
+    x_eq = centres[0].x
+    for mu in (0, "0.1"):
+        scene = Scene.make(track, [PARTICLE], [x_eq], [0], frame=frame, friction=mu, run=RunSettings.make(3))
+        result = simulate(scene)
+        assert result.status is Status.COMPLETED
+        assert float(result.final_state[0]) == pytest.approx(x_eq, abs=1e-9)
+    # slightly off the equilibrium a rough particle sticks at once (within the sticking band)
+    scene = Scene.make(track, [PARTICLE], [x_eq + 1e-3], [0], frame=frame, friction="0.1", run=RunSettings.make(1))
+    result = simulate(scene)
+    assert result.final_modes == ("stuck",) and float(result.final_state[0]) == x_eq + 1e-3
+
+
+# -- every track type, turning planes, two-sided tracks ----------------------------------------------------
+
+
+def test_a_rough_arc_chain_passes_its_junctions_and_accounts_for_its_energy():
+    track = ArcChainTrack.make([Segment("line", angle=mpmath.mpf("-0.5"), length=mpmath.mpf(1)),
+                                Segment("arc", radius=mpmath.mpf(1), side="concave", start=mpmath.mpf("-0.5"),
+                                        end=mpmath.mpf("1.2"))], 0, 0)
+    scene = Scene.make(track, [PARTICLE], ["0.1"], [0], friction="0.05", static_friction="0.1", track_sides="one",
+                       run=RunSettings.make(10))
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED
+    assert result.junctions, "the particle slides through the junction"
+    assert result.final_modes == ("stuck",)
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work), rel=1e-12)
+
+
+def test_in_a_turning_plane_the_jacobi_integral_drops_by_the_friction_work_with_the_coriolis_reaction():
+    track = CurveTrack.make("x**2", -1, 1)
+    scene = Scene.make(track, [PARTICLE], ["-0.5"], [1], frame=Frame.make("2", 0), friction="0.1",
+                       run=RunSettings.make(5), limiter_restitution=1)
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED and result.transitions
+    # no impacts lose energy (limiter restitution 1): the Jacobi integral falls by the friction work alone
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work), rel=1e-11)
+
+
+def test_on_a_two_sided_circle_friction_acts_on_the_magnitude_of_the_reaction_over_the_top():
+    # 6 rad/s: above the horizontal diameter the weight outgrows the centripetal need and the outer
+    # side takes over (N changes sign near phi = 2.2), below the top: the particle swings back
+    scene = Scene.make(CircleTrack.of_radius(1), [PARTICLE], [0], [6], friction="0.05", track_sides="two",
+                       run=RunSettings.make(3))
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED
+    assert result.warnings  # the normal force changed sign (the outer side held the particle)
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work), rel=1e-12)
+    assert all(w >= 0 for w in result.friction_work)
+
+
+# -- forcing ------------------------------------------------------------------------------------------------
+
+
+def test_a_periodic_force_releases_a_stuck_particle_where_it_exceeds_mu_s_n():
+    f0, nu, mu_s = 3, 2, "0.2"
+    forcing = Forcing.make("force", amplitude=f0, frequency=nu, phase=-math.pi / 2)  # F0 sin(nu t)
+    scene = Scene.make(CurveTrack.make("0*x", -5, 5), [PARTICLE], [0], [0], friction="0.1", static_friction=mu_s,
+                       forcing=forcing, track_sides="one", run=RunSettings.make("0.8"))
+    result = simulate(scene)
+    first = result.transitions[0]
+    assert (first[2], first[3]) == ("stuck", "sliding+")
+    with mpmath.workdps(30):
+        expected = mpmath.asin(mpmath.mpf(mu_s) * mpmath.mpf(G) / f0) / nu
+    assert first[0] == pytest.approx(float(expected), abs=1e-14)
+
+
+def test_a_moving_base_releases_a_stuck_particle_where_its_inertial_force_exceeds_mu_s_n():
+    amplitude, nu, mu_s = "0.1", 8, "0.5"  # A nu^2 = 6.4 m/s^2 > mu_s g = 4.905
+    forcing = Forcing.make("base", amplitude=amplitude, frequency=nu, phase=math.pi / 2)  # -A nu^2 sin: starts at 0
+    scene = Scene.make(CurveTrack.make("0*x", -5, 5), [PARTICLE], [0], [0], friction="0.3", static_friction=mu_s,
+                       forcing=forcing, track_sides="one", run=RunSettings.make("0.3"))
+    result = simulate(scene)
+    first = result.transitions[0]
+    assert first[2] == "stuck" and first[3] in ("sliding+", "sliding-")
+    with mpmath.workdps(30):
+        expected = mpmath.asin(mpmath.mpf(mu_s) * mpmath.mpf(G) / (mpmath.mpf(amplitude) * nu**2)) / nu
+    assert first[0] == pytest.approx(float(expected), abs=1e-14)
+
+
+def test_the_stroboscopic_section_samples_once_a_forcing_period_and_finds_the_periodic_stick_slip_orbit():
+    forcing = Forcing.make("force", amplitude=2, frequency=2)
+    scene = Scene.make(CurveTrack.make("x**2/2", -3, 3), [PARTICLE], [0], [0], friction="0.1", static_friction="0.2",
+                       forcing=forcing, track_sides="one", run=RunSettings.make(40))
+    result = simulate(scene)
+    table = result.strobe_table
+    period = 2 * math.pi / 2
+    np.testing.assert_allclose(table[:, 0], period * np.arange(len(table)), rtol=0, atol=1e-12)
+    assert len(table) == int(40 // period) + 1
+    # the forced stick-slip oscillator settles on a periodic orbit: successive samples converge
+    assert abs(table[-1, 1] - table[-2, 1]) < 1e-6 and abs(table[-1, 2] - table[-2, 2]) < 1e-6
+
+
+# -- precision ladder -------------------------------------------------------------------------------------
+
+
+def test_a_quad_run_finds_the_turning_point_to_quad_precision():
+    scene = Scene.make(incline("0.3"), [PARTICLE], [0], [2], friction="0.2", static_friction="0.5",
+                       track_sides="one", run=RunSettings.make(1))
+    result = simulate(scene, precision="quad")
+    with mpmath.workdps(50):  # the slope's angle beyond a double
+        alpha = mpmath.atan(mpmath.mpf("0.3"))
+        ref = rough.incline_sliding(alpha, "0.2", "0.5", 0, 2, G, 1)
+    t = result.transitions[0][0]
+    # transitions keep a double time; the position is in the run's own type
+    assert t == pytest.approx(float(ref.transitions[0].t), abs=2e-16)
+    with mpmath.workdps(40):
+        assert abs(mpmath.mpf(str(result.transitions[0][4])) - ref.transitions[0].x) < mpmath.mpf("1e-30")
+
+
+# -- scene files and the CLI ------------------------------------------------------------------------------
+
+ROUGH_SCENE = """
+name = "rough"
+[track]
+type = "curve"
+y = "x**2/2"
+x_min = -2
+x_max = 2
+friction = 0.1
+static_friction = 0.2
+sides = "one"
+[forcing]
+kind = "force"
+amplitude = 2.0
+frequency = 2.0
+[[bodies]]
+shape = "particle"
+mass = 1.0
+x = 0.0
+[[bodies]]
+shape = "disk"
+radius = 0.1
+mass = 1.0
+x = 1.0
+slip = 0.5
+[collision]
+law = "newton"
+restitution = 0.5
+[run]
+t_end = 6
+"""
+
+
+def test_a_scene_file_gives_static_friction_slip_and_forcing():
+    scene = parse_scene(ROUGH_SCENE)
+    assert scene.rough and float(scene.static_coefficient) == 0.2
+    assert [float(w) for w in scene.slip] == [0.0, 0.5]
+    assert scene.forcing.kind == "force" and scene.forcing.frequency == 2
+
+
+@pytest.mark.parametrize("edit, field", [
+    (("static_friction = 0.2", "static_friction = 0.05"), "track.static_friction"),
+    (("kind = \"force\"", "kind = \"push\""), "forcing.kind"),
+    (("frequency = 2.0", "frequency = 0"), "forcing.frequency"),
+    (("x = 0.0\n", "x = 0.0\nslip = 1.0\n"), "bodies[1].slip"),
+    (("amplitude = 2.0", "amplitude = 2.0\nstrength = 1"), "forcing.strength"),
+])
+def test_bad_rough_scene_fields_are_named(edit, field):
+    with pytest.raises(SceneError) as info:
+        parse_scene(ROUGH_SCENE.replace(*edit))
+    assert info.value.field == field
+
+
+def test_the_cli_writes_transitions_and_the_stroboscopic_section(tmp_path):
+    path = tmp_path / "rough.toml"
+    path.write_text(ROUGH_SCENE)
+    out = tmp_path / "out"
+    run = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "run", str(path), "--out", str(out),
+                          "--no-figures"], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    with open(out / "transitions.csv") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["n", "t", "body", "from", "to", "q", "dq"]
+    assert len(rows) > 2 and {r[3] for r in rows[1:]} <= {"rolling", "sliding+", "sliding-", "stuck"}
+    assert [int(r[0]) for r in rows[1:]] == list(range(1, len(rows)))
+    with open(out / "stroboscopic.csv") as fh:
+        strobe = list(csv.reader(fh))
+    assert strobe[0] == ["n", "t", "x_1", "x_2", "dx_1", "dx_2"] and len(strobe) == 3  # t = 0, pi (t_end 6)
+    bad = path.with_name("bad.toml")
+    bad.write_text(ROUGH_SCENE.replace("static_friction = 0.2", "static_friction = 0.01"))
+    run = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "run", str(bad), "--out",
+                          str(tmp_path / "bad")], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and "track.static_friction" in run.stderr and run.stderr.count("\n") == 1
