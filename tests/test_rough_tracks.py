@@ -12,6 +12,7 @@ import csv
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import mpmath
 import numpy as np
@@ -24,12 +25,13 @@ from heyroll.model.forcing import Forcing
 from heyroll.model.frame import Frame
 from heyroll.model.laws import make_law
 from heyroll.model.scene import RunSettings, Scene
-from heyroll.model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment, first_integral
+from heyroll.model.tracks import ArcChainTrack, CircleTrack, CurveTrack, ParametricTrack, Segment, first_integral
 from heyroll.reference import rough
 from heyroll.simulation.driver import simulate
 from heyroll.simulation.result import Status
 
 G = "9.81"
+ROOT = Path(__file__).resolve().parent.parent
 PARTICLE = Body.of_shape("particle", 0, mass=1)
 DISK = Body.of_shape("disk", "0.1", mass=1)
 
@@ -377,3 +379,99 @@ def test_the_cli_writes_transitions_and_the_stroboscopic_section(tmp_path):
     run = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "run", str(bad), "--out",
                           str(tmp_path / "bad")], capture_output=True, text=True, timeout=120)
     assert run.returncode == 2 and "track.static_friction" in run.stderr and run.stderr.count("\n") == 1
+
+
+# -- a parametric curve: the cycloid ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("u0", [1.0, 2.0, 2.8])
+def test_on_the_smooth_cycloid_every_swing_lasts_2_pi_sqrt_a_over_g_whatever_its_amplitude(u0):
+    """The tautochrone: x = a (u - sin u), y = a (1 + cos u) = s^2 / (8a) with s = 4a cos(u/2) the arc
+    length from the bottom, so s'' = -g s / (4a): a period 4 pi sqrt(a/g) for every amplitude."""
+    track = ParametricTrack.make("u - sin(u)", "1 + cos(u)", "0.5", "5.78")
+    result = simulate(Scene.make(track, [PARTICLE], [u0], [0], friction=0, track_sides="one",
+                                 run=RunSettings.make(7)))
+    turns = [r for r in result.transitions if r[0] > 0]
+    half = 2 * math.pi * math.sqrt(1 / 9.81)
+    assert len(turns) == 3
+    for n, row in enumerate(turns, start=1):
+        assert row[0] == pytest.approx(n * half, rel=1e-14)
+    assert float(turns[0][4]) == pytest.approx(2 * math.pi - u0, abs=1e-13)  # the mirror point
+
+
+def test_every_rough_example_runs_from_its_scene_file(tmp_path):
+    from heyroll.interfaces.scene_file import load_scene
+
+    examples = sorted(ROOT.joinpath("examples").glob("rough_*.toml"))
+    assert len(examples) >= 4
+    for path in examples:
+        scene = load_scene(path)
+        result = simulate(scene)
+        assert result.status is Status.COMPLETED, (path.name, result.message)
+        assert result.transitions, path.name
+        work = sum(result.friction_work)
+        assert work > 0
+        if scene.forcing is None and all(b.is_particle for b in scene.bodies):
+            # energy falls by the friction work and the impacts' losses (the table's energies are the
+            # rolling form: for particles the whole energy)
+            table = result.collision_table()
+            impacts = float((table["energy_before"] - table["energy_after"]).sum())
+            limiters = sum(0.5 * float(scene.bodies[b].mass) * (v * v - w * w)
+                           * float(scene.track.sigma(scene.bodies[b], q)) ** 2 * float(scene.bodies[b].kappa)
+                           for t, b, kind, _f, _t, q, v, w in result.passages if kind != 0)
+            assert result.energy_initial - result.energy_final == pytest.approx(work + impacts + limiters, rel=1e-9), \
+                path.name
+
+
+def test_bodies_moving_together_turn_and_stick_together():
+    """Three particles after plastic collisions slide as one; the turning points of units moving together
+    fall in one Taylor step: the first one's event ends the step past the others' roots, which must
+    still be turning points (before: a cluster slid on with friction pushing it the wrong way)."""
+    scene = Scene.make(CircleTrack.of_radius(1), [PARTICLE] * 3, [-1.0, 0.3, 0.9], [2, 0, 0],
+                       law=make_law("newton", 0), friction="0.05", static_friction="0.1", run=RunSettings.make(10))
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED, result.message
+    assert result.final_modes == ("stuck",) * 3
+    stuck = [r for r in result.transitions if r[3] == "stuck"]
+    assert len({r[0] for r in stuck}) == 1 and len(stuck) == 3  # one instant, all three
+    # every sliding stretch moves in its mode's direction: no rate against the mode's sign
+    rows = {}
+    for t, k, old, new, q, dq in result.transitions:
+        if new.startswith("sliding") and float(dq) != 0:
+            assert (float(dq) > 0) == (new == "sliding+")
+        rows.setdefault(k, []).append(new)
+    table = result.collision_table()
+    impacts = float((table["energy_before"] - table["energy_after"]).sum())
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work) + impacts, rel=1e-12)
+
+
+def _mode_at(result, k, times):
+    rows = [r for r in result.transitions if r[1] == k]
+    first = rows[0][2] if rows else result.final_modes[k]
+    starts = np.array([r[0] for r in rows])
+    modes = [first] + [r[3] for r in rows]
+    return [modes[int(np.searchsorted(starts, t, side="right"))] for t in times]
+
+
+@pytest.mark.parametrize("name", ["rough_circle", "rough_rotating_curve", "rough_parabola_forced", "rough_cycloid"])
+def test_a_sliding_particle_never_moves_against_its_mode_and_a_stuck_one_never_moves(name):
+    """The invariant the friction events keep, checked on the dense trajectory of every example."""
+    from heyroll.interfaces.scene_file import load_scene
+
+    scene = load_scene(ROOT / "examples" / f"{name}.toml")
+    result = simulate(scene, dense=True)
+    times = np.linspace(0, float(result.t_final), 20001)
+    states = result.states_at(times)
+    n = len(scene.bodies)
+    for k, body in enumerate(scene.bodies):
+        if not body.is_particle:
+            continue
+        rate = states[:, n + k]
+        scale = 1e-9 * (1 + np.abs(rate).max())
+        for mode, v in zip(_mode_at(result, k, times), rate):
+            if mode == "sliding+":
+                assert v >= -scale
+            elif mode == "sliding-":
+                assert v <= scale
+            else:
+                assert abs(v) <= scale

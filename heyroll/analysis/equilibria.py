@@ -177,6 +177,11 @@ class EquilibriumProblem:
 
 
 def problem_of(scene: Scene, body: int = 0) -> EquilibriumProblem:
+    if scene.track.kind == "parametric":
+        from ..errors import SceneError
+
+        raise SceneError("track.type", "relative equilibria are found on circles, curves y = f(x) and arc chains; "
+                         "not yet on a parametric curve")
     return EquilibriumProblem(scene.track, scene.bodies[body], scene.frame, float(scene.g))
 
 

@@ -176,19 +176,33 @@ def run_figures(result: SimulationResult, out_dir: Path) -> dict:
     ``dense=True`` up to the FIGURE_COLLISIONS-th collision (junction
     parameters switch inside that run, so no re-integration could skip them).
     """
-    if result.scene.track.linear_gap:
+    scene = result.scene
+    # Friction modes and forcing: the branches between collisions are not the smooth track's
+    # phase curves; every figure then reads the repeated run's continuous output.
+    rough = scene.rough or scene.forcing is not None
+    files = {"phase_portrait": "phase_portrait.png", "energy": "energy.png"}
+    if scene.track.linear_gap and not rough:
         phase_portrait_figure(result, out_dir / "phase_portrait.png")
         energy_figure(result, out_dir / "energy.png")
-    else:
-        from ..simulation.driver import simulate
-        from .portrait_figures import body_energy_figure, branches_figure
+        return files
+    from ..simulation.driver import simulate
+    from .portrait_figures import body_energy_figure, branches_figure
 
-        t_end = float(result.t_final)
-        if result.n_collisions > FIGURE_COLLISIONS and result.kept_collisions > FIGURE_COLLISIONS:
-            t_end = float(result.times[FIGURE_COLLISIONS])
-        if not t_end > 0:
-            t_end = float(result.scene.run.t_end)
-        dense = simulate(result.scene, t_end=t_end, max_collisions=None, precision="double", dense=True)
+    t_end = float(result.t_final)
+    if result.n_collisions > FIGURE_COLLISIONS and result.kept_collisions > FIGURE_COLLISIONS:
+        t_end = float(result.times[FIGURE_COLLISIONS])
+    if not t_end > 0:
+        t_end = float(scene.run.t_end)
+    dense = simulate(scene, t_end=t_end, max_collisions=None, precision="double", dense=True)
+    if scene.track.linear_gap:
+        phase_portrait_figure(dense, out_dir / "phase_portrait.png")
+        energy_figure(dense, out_dir / "energy.png")
+    else:
         branches_figure(dense, out_dir / "phase_portrait.png")
         body_energy_figure(dense, out_dir / "energy.png")
-    return {"phase_portrait": "phase_portrait.png", "energy": "energy.png"}
+    if rough:
+        from .friction_figures import friction_figures
+
+        files.update(friction_figures(dense, out_dir))
+    return files
+

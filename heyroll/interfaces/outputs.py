@@ -17,7 +17,8 @@ import numpy as np
 
 from .._version import __version__
 from .csv_text import collisions_csv, csv_rows
-from ..simulation.result import INTEGER_COLUMNS, PASSAGE_COLUMNS, TABLE_COLUMNS, SimulationResult, build_collision_table
+from ..simulation.result import (INTEGER_COLUMNS, PASSAGE_COLUMNS, SimulationResult,
+                                 build_collision_table, table_columns)
 
 
 def versions() -> dict:
@@ -70,10 +71,10 @@ class _TableFile:
         self.passage_rows += table.size
 
     def write(self, chunk: tuple, first_number: int) -> None:
-        times, numbers, before, after, flags = chunk
+        times, numbers, before, after, flags = chunk[:5]
         table = build_collision_table(
             self.scene, self.pairs, self.precision, times, numbers, before, after, flags,
-            first_number=first_number, native=True,
+            first_number=first_number, native=True, modes=chunk[5] if len(chunk) > 5 else None,
         )
         self._append(table)
         self.rows += table.size
@@ -97,7 +98,7 @@ class CsvTableSink(_TableFile):
     format = "csv"
 
     def _start(self):
-        self._file.write((",".join(TABLE_COLUMNS) + "\n").encode())
+        self._file.write((",".join(table_columns(self.scene)) + "\n").encode())
 
     def _append(self, table):
         self._file.write(csv_rows(table, self.precision.format))
@@ -234,7 +235,8 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
     if sink is None:
         sink = table_sink(out_dir, "csv")
         sink.open(result.scene, result.pairs, result.precision)
-        sink.write((result.times, result.pair_numbers, result.states_before, result.states_after, result.law_flags), 1)
+        chunk = (result.times, result.pair_numbers, result.states_before, result.states_after, result.law_flags)
+        sink.write(chunk if result.collision_modes is None else chunk + (result.collision_modes,), 1)
         if sink.passages_path:
             sink.write_passages(result.passage_table())
         sink.close()

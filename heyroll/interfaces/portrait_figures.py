@@ -84,6 +84,7 @@ def _coordinate_label(scene: Scene) -> tuple[str, str]:
         "x": ("x (contact abscissa) [m]", "dx/dt [m/s]"),
         "s": ("s (arc length of the centre's path) [m]", "ds/dt [m/s]"),
         "phi": ("phi (angle from the lowest point) [rad]", "dphi/dt [rad/s]"),
+        "u": ("u (parameter of the contact point)", "du/dt [1/s]"),
     }[scene.coordinate]
 
 

@@ -19,19 +19,20 @@ from ..model.laws import make_law
 from ..model.forcing import Forcing
 from ..model.frame import Frame
 from ..model.scene import STANDARD_GRAVITY, RunSettings, Scene
-from ..model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment, ThreeArcTrack
+from ..model.tracks import ArcChainTrack, CircleTrack, CurveTrack, ParametricTrack, Segment, ThreeArcTrack
 
 #: "sweep": a scene file may hold the [sweep] table of `heyroll sweep` (heyroll.sweep.plan checks
 #: it); a single run ignores it.
 TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "frame", "sweep", "forcing"}
 TRACK_KEYS = {"type", "radius", "friction", "static_friction", "sides"}
-TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs")
+TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs", "parametric")
 #: Keys of each path track type (paper section 5).
 PATH_TRACK_KEYS = {
     "curve": {"type", "y", "x_min", "x_max", "limiter_restitution", "sides", "friction", "static_friction"},
     "arcs": {"type", "segments", "start_x", "start_y", "limiter_restitution", "sides", "friction", "static_friction"},
     "three_arcs": {"type", "radius", "hump_radius", "beta", "limiter_restitution", "sides", "friction",
                    "static_friction"},
+    "parametric": {"type", "x", "y", "u_min", "u_max", "limiter_restitution", "sides", "friction", "static_friction"},
 }
 SEGMENT_KEYS = {"arc": {"kind", "radius", "side", "start", "end"}, "line": {"kind", "angle", "length"}}
 FRAME_KEYS = {"omega", "axis_x"}
@@ -43,7 +44,7 @@ BODY_KEYS = BODY_SHAPE_KEYS | {"phi", "dphi", "omega"}
 #: Where a body starts on a path track: curve (contact abscissa x and its
 #: rate), arc chain (arc length s of the centre's path, or a segment and the
 #: angle on it: phi on concave arcs, psi on convex ones, distance on lines).
-PATH_BODY_KEYS = {"curve": BODY_SHAPE_KEYS | {"x", "dx"},
+PATH_BODY_KEYS = {"curve": BODY_SHAPE_KEYS | {"x", "dx"}, "parametric": BODY_SHAPE_KEYS | {"u", "du"},
                   "arcs": BODY_SHAPE_KEYS | {"s", "ds", "segment", "angle", "dangle"}}
 COLLISION_KEYS = {"law", "restitution", "on_inconsistent"}
 RUN_KEYS = {"t_end", "max_collisions"}
@@ -141,6 +142,9 @@ def _path_track(table: dict):
     if kind == "curve":
         return CurveTrack.make(table.get("y"), _number(table, "x_min", "track", required=True),
                                _number(table, "x_max", "track", required=True))
+    if kind == "parametric":
+        return ParametricTrack.make(table.get("x"), table.get("y"), _number(table, "u_min", "track", required=True),
+                                    _number(table, "u_max", "track", required=True))
     if kind == "three_arcs":
         return ThreeArcTrack.make(_number(table, "radius", "track", required=True),
                                         _number(table, "hump_radius", "track", required=True),
@@ -172,7 +176,7 @@ def _path_track(table: dict):
 def _path_scene(data: dict, track_table: dict, name: str, g) -> Scene:
     track = _path_track(track_table)
     frame = _frame(_table(data, "frame", required=False))
-    kind = "curve" if isinstance(track, CurveTrack) else "arcs"
+    kind = "curve" if isinstance(track, CurveTrack) else "parametric" if isinstance(track, ParametricTrack) else "arcs"
     bodies_data = _bodies_list(data)
     bodies, qs, dqs = [], [], []
     for n, entry in enumerate(bodies_data, start=1):
@@ -180,9 +184,10 @@ def _path_scene(data: dict, track_table: dict, name: str, g) -> Scene:
         _no_unknown(entry, PATH_BODY_KEYS[kind], field)
         body = _make_body(entry, field)
         track.check_body(body, field)
-        if kind == "curve":
-            q = _number(entry, "x", field, required=True)
-            dq = _number(entry, "dx", field, default="0")
+        if kind in ("curve", "parametric"):
+            c = track.coordinate
+            q = _number(entry, c, field, required=True)
+            dq = _number(entry, f"d{c}", field, default="0")
         elif "segment" in entry:
             if "s" in entry or "ds" in entry:
                 raise SceneError(f"{field}.segment", "give s (and ds) or segment and angle (and dangle), not both")

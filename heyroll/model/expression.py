@@ -72,20 +72,23 @@ MAX_EXPRESSION_LENGTH = 2000
 MAX_EXPRESSION_DEPTH = 100
 
 
-def parse(text: str, field: str = "track.y") -> Node:
-    """Parse ``text`` into an expression tree; raises ExpressionError (a SceneError)."""
+def parse(text: str, field: str = "track.y", variable: str = "x") -> Node:
+    """Parse ``text`` into an expression tree; raises ExpressionError (a SceneError).
+
+    ``variable``: the name of the one variable (x for y = f(x); u for a parametric curve).
+    """
     if not isinstance(text, str):
-        raise ExpressionError(field, f"must be a string expression in x, got {text!r}")
+        raise ExpressionError(field, f"must be a string expression in {variable}, got {text!r}")
     if len(text) > MAX_EXPRESSION_LENGTH:
         raise ExpressionError(field, f"is {len(text)} characters long; at most {MAX_EXPRESSION_LENGTH} are allowed")
-    tokens = _tokenize(text, field)
+    tokens = _tokenize(text, field, variable)
     depth = deepest = 0
     for kind, value in tokens:
         depth += value == "(" and 1 or value == ")" and -1 or 0
         deepest = max(deepest, depth)
     if deepest > MAX_EXPRESSION_DEPTH // 2:
         raise ExpressionError(field, f"nests parentheses {deepest} deep; at most {MAX_EXPRESSION_DEPTH // 2} are allowed")
-    parser = _Parser(tokens, field, text)
+    parser = _Parser(tokens, field, text, variable)
     node = parser.expression()
     if parser.pos != len(tokens):
         raise ExpressionError(field, f"unexpected {tokens[parser.pos][1]!r} in {text!r}")
@@ -107,20 +110,20 @@ def _depth(node: Node) -> int:
     return deepest
 
 
-def _tokenize(text: str, field: str) -> list[tuple[str, str]]:
+def _tokenize(text: str, field: str, variable: str = "x") -> list[tuple[str, str]]:
     tokens, pos = [], 0
     text = text.rstrip()
     if not text:
-        raise ExpressionError(field, "empty expression: give y as a function of x, e.g. \"0.5*x**2\"")
+        raise ExpressionError(field, f"empty expression: give a function of {variable}, e.g. \"0.5*{variable}**2\"")
     while pos < len(text):
         m = _TOKEN.match(text, pos)
         if not m or m.end() == pos:
             raise ExpressionError(field, f"character {text[pos]!r} at position {pos} is not allowed "
-                                  "(numbers, x, + - * / **, parentheses, sin cos exp sqrt)")
+                                  f"(numbers, {variable}, + - * / **, parentheses, sin cos exp sqrt)")
         kind = m.lastgroup
         value = m.group(kind)
-        if kind == "name" and value != "x" and value not in FUNCTIONS:
-            raise ExpressionError(field, f"unknown name {value!r}; allowed: x, {', '.join(FUNCTIONS)}")
+        if kind == "name" and value != variable and value not in FUNCTIONS:
+            raise ExpressionError(field, f"unknown name {value!r}; allowed: {variable}, {', '.join(FUNCTIONS)}")
         tokens.append((kind, value))
         pos = m.end()
     return tokens
@@ -130,8 +133,8 @@ class _Parser:
     """Recursive descent: expr := term (+|- term)*; term := unary (*|/ unary)*;
     unary := (+|-) unary | power; power := atom (** unary)?  (right-assoc)."""
 
-    def __init__(self, tokens, field, text):
-        self.tokens, self.pos, self.field, self.text = tokens, 0, field, text
+    def __init__(self, tokens, field, text, variable="x"):
+        self.tokens, self.pos, self.field, self.text, self.variable = tokens, 0, field, text, variable
 
     def peek(self):
         return self.tokens[self.pos] if self.pos < len(self.tokens) else (None, None)
@@ -177,7 +180,7 @@ class _Parser:
         kind, tok = self.take()
         if kind == "num":
             return Num(tok)
-        if tok == "x":
+        if tok == self.variable:
             return X
         if kind == "name":
             self.take("(")

@@ -50,6 +50,14 @@ def body_function(system):
     return _compiled(("body", system.shape), outputs, system.variables, system.precision)
 
 
+def motion_function(system):
+    """``f(state, pars, time) -> array``: psi'' and psi\'\'\' per unit (the circle with friction or forcing), or None."""
+    outputs = [x for values in system.unit_motion for x in values]
+    if not outputs:
+        return None
+    return _compiled(("motion", system.shape), outputs, system.variables, system.precision)
+
+
 def link_function(system):
     """``f(state, pars) -> array``: gap, dgap/dq_i, dgap/dq_j per link of a cluster (not linear gaps), or None."""
     outputs = [x for values in system.link_terms for x in values]

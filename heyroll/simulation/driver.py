@@ -26,7 +26,7 @@ import mpmath
 import numpy as np
 
 from ..model.scene import Scene
-from .events import CollisionLog, StopRequest, mode_events, mode_handlers
+from .events import CollisionLog, StopRequest, fill_record_modes, mode_events, mode_handlers
 from .resolve.friction import FrictionState, initial_modes
 from .compiled_cache import CompiledCache
 from .precision import Precision
@@ -207,7 +207,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
     events = DEFAULT_MAX_EVENTS if opts.max_events is ... else opts.max_events
     # Collisions stop at whichever limit comes first; passages and mode changes check max_events.
     collision_limit = limit if events is None else events if limit is None else min(limit, events)
-    log = CollisionLog(max_collisions=collision_limit, max_events=events)
+    log = CollisionLog(max_collisions=collision_limit, max_events=events, record_modes=[] if scene.rough else None)
     stream = _Stream(log, sink, progress, len(scene.bodies))
     if sink is not None:
         sink.open(scene, scene.pairs, precision)
@@ -221,6 +221,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
     num = precision.number
     friction = FrictionState(scene, precision, initial_modes(scene), [num(w) for w in scene.slip]) \
         if scene.rough else None
+    stream.friction, stream.pair_bodies = friction, [(p.i, p.j) for p in scene.pairs]
     start = _start(scene, precision, pairs)
     units, first_system = start.units, start.system
     full_state = list(start.state)
@@ -246,7 +247,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
     while limit != 0 and not start_limit:
         system = first_system if first else build_system(scene, precision, pairs=pairs, units=units)
         later_mode, first = not first, False
-        holder: list = [None, None]
+        holder: list = [None, None, None]  # state, parameters, the mode's FrictionModes (rough tracks)
         handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale, pieces, friction)
         cooldown = precision.number(precision.epsilon * time_scale)
         # The first mode is compiled optimized; a later one (a cluster forming or splitting,
@@ -275,10 +276,14 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         # open by a few ulps so that their events can see them close again.
         skip_merge = {n for n, c in enumerate(system.contacts) if c.pair_index == split_pair}
         split_pair = None
-        settled = settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
         friction_modes = getattr(settle, "friction", None)
         if friction_modes is not None:  # each unit's friction mode from the run's modes and the state now
             friction_modes.start(ta, ta.state, ta.time)
+            rates_before = ta.state.tolist()
+        settled = settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
+        if friction_modes is not None:  # the modes follow the rates collisions at the mode's start left
+            fill_record_modes(log, friction.modes, stream.pair_bodies)
+            friction_modes.reconcile(ta, ta.state, ta.time, rates_before)
         if settled:
             full_state = system.expand(ta.state.tolist())
             modes[-1] = dataclasses.replace(modes[-1], state=tuple(full_state))
@@ -361,12 +366,14 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         stream.flush()
         stream.flush_passages()
         sink.close()
-        kept = stream.kept or records_to_arrays([], len(scene.bodies))
+        kept = stream.kept or records_to_arrays([], len(scene.bodies), [] if scene.rough else None)
     else:
-        kept = records_to_arrays(log.records, len(scene.bodies))
+        if friction is not None:
+            fill_record_modes(log, friction.modes, [(p.i, p.j) for p in scene.pairs])
+        kept = records_to_arrays(log.records, len(scene.bodies), log.record_modes)
     if progress is not None:
         progress(float(t_final), total)
-    times, numbers, before, after, flags = kept
+    times, numbers, before, after, flags = kept[:5]
     return SimulationResult(
         scene=scene,
         status=status,
@@ -403,6 +410,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         contact_intervals=tuple(intervals),
         mode_changes=tuple(modes),
         transitions=tuple(friction.transitions) if friction is not None else (),
+        collision_modes=kept[5] if len(kept) > 5 else None,
         final_modes=tuple(friction.modes) if friction is not None else (),
         final_slip=tuple(friction.slips) if friction is not None else (),
         friction_work=tuple(friction.work) if friction is not None else (),
@@ -574,7 +582,10 @@ def _start(scene: Scene, precision: Precision, pairs) -> _Start:
 
 
 def _initial_contacts(scene, precision, pairs, units, full_state, system=None):
-    """Bodies that start touching at rest, pressed together, start in contact."""
+    """Bodies that start touching at rest, pressed together, start in contact (with friction or
+    forcing the settler judges them at the mode's start, with the compiled accelerations)."""
+    if scene.rough or scene.forcing is not None:
+        return units, full_state
     system = system or build_system(scene, precision, pairs=pairs, units=units)
     nb = len(scene.bodies)
     eps = precision.epsilon
@@ -629,7 +640,7 @@ def _track_limit_at_start(scene: Scene, system: SceneSystem, state) -> tuple[str
     return None
 
 
-def records_to_arrays(records: list, n_bodies: int) -> tuple:
+def records_to_arrays(records: list, n_bodies: int, modes: list | None = None) -> tuple:
     """Raw callback records -> (times, pair_numbers, states_before, states_after, flags).
 
     A record is (t, pair number, full state before, rate_i, rate_j, flag) on the
@@ -637,9 +648,11 @@ def records_to_arrays(records: list, n_bodies: int) -> tuple:
     None, full state after, flag) when clusters move.
     """
     n, nb = len(records), n_bodies
+    # Rough tracks: a sixth array, the friction modes of each collision's bodies (events.CollisionLog.record_modes).
+    extra = () if modes is None else (np.array(modes, dtype="U8").reshape(n, 4),)
     if not n:
         empty = np.zeros((0, 2 * nb))
-        return np.zeros(0), np.zeros(0, dtype=np.int64), empty, empty.copy(), np.zeros(0, dtype=np.int64)
+        return (np.zeros(0), np.zeros(0, dtype=np.int64), empty, empty.copy(), np.zeros(0, dtype=np.int64)) + extra
     times = np.array([r[0] for r in records])
     numbers = np.array([r[1] for r in records], dtype=np.int64)
     flags = np.array([r[5] for r in records], dtype=np.int64)
@@ -655,8 +668,8 @@ def records_to_arrays(records: list, n_bodies: int) -> tuple:
         after[fast, nb + bodies[:, 1]] = [records[k][4] for k in fast]
     for k, r in enumerate(records):
         if r[3] is None:
-            after[k] = r[4]
-    return times, numbers, before, after, flags
+            after[k] = r[4][: 2 * nb]
+    return (times, numbers, before, after, flags) + extra
 
 
 def pair_bodies(n_bodies: int) -> np.ndarray:
@@ -679,7 +692,9 @@ class _Stream:
         log = self.log
         if self.sink is None or not log.records:
             return
-        chunk = records_to_arrays(log.records, self.n_bodies)
+        if log.record_modes is not None:
+            fill_record_modes(log, self.friction.modes, self.pair_bodies)
+        chunk = records_to_arrays(log.records, self.n_bodies, log.record_modes)
         rows = getattr(self.sink, "rows", None)
         # Ctrl-C or SIGTERM during the write waits for its end (measured: a signal between the
         # sink's write and its row count left a chunk in the file twice).
@@ -713,6 +728,8 @@ class _Stream:
             self.kept = chunk
         log.flushed += len(log.records)
         log.records.clear()
+        if log.record_modes is not None:
+            log.record_modes.clear()
 
     def on_full(self) -> None:
         if self.sink is not None:

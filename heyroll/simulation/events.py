@@ -101,6 +101,8 @@ class CollisionLog:
     #: and the stroboscopic section's samples: (t, full state) once a forcing period.
     friction_transitions: int = 0
     strobe: list = field(default_factory=list)
+    #: Rough tracks: per record, the friction modes of its bodies i, j before and after (else None).
+    record_modes: list | None = None
 
     def record_passage(self, row: tuple) -> bool:
         """Keep a passage (see ``passages``); False: max_events is reached, the run stops."""
@@ -147,12 +149,12 @@ def mode_handlers(
     FrictionModes is then ``settle.friction``.
     """
     if not system.linear_gap:
-        return _with_friction(scene, system, log, holder, friction,
+        return _with_friction(scene, system, log, holder, friction, time_scale,
                               *_local_handlers(scene, system, log, holder, time_scale, pieces))
     fast = not any(u.is_cluster for u in system.units)
     handlers: list = []
     resolvers: list = []
-    settle = contact_settler(scene, system, resolvers, log, time_scale)
+    settle = contact_settler(scene, system, resolvers, log, time_scale, holder)
     # Three or more units: contacts can close at the same instant.
     cascade = settle if system.n_units > 2 else None
     # The (double-length) time of each contact's last collision, or of the mode's start (the
@@ -166,11 +168,11 @@ def mode_handlers(
             handler = _make_unit_callback(scene, system, number, log, holder, time_scale, settle, touched)
             resolvers.append(handler.resolve)
         handlers.append(handler)
-    return _with_friction(scene, system, log, holder, friction,
+    return _with_friction(scene, system, log, holder, friction, time_scale,
                           *_other_handlers(scene, system, log, holder, time_scale, pieces, handlers, settle))
 
 
-def _with_friction(scene, system, log, holder, friction, handlers, warnings, settle):
+def _with_friction(scene, system, log, holder, friction, time_scale, handlers, warnings, settle):
     """Friction events' handlers after the others (mode_events' order); impacts (collisions,
     limiters) wrapped so that each unit's friction mode follows its new rate; the
     stroboscopic samples of a forced run."""
@@ -180,15 +182,33 @@ def _with_friction(scene, system, log, holder, friction, handlers, warnings, set
         return handlers, warnings, settle
     from .resolve.friction import FrictionModes
 
-    modes = FrictionModes(scene, system, friction, holder, log)
+    modes = FrictionModes(scene, system, friction, holder, log, time_scale)
     n_impacts = len(system.contacts) + len(system.link_expressions) + len(system.bound_expressions)
+
+    records, record_modes, body_modes = log.records, log.record_modes, friction.modes
+    pair_bodies = [(p.i, p.j) for p in scene.pairs]
 
     def wrapped(handler):
         def on_impact(ta, d_sgn):
             s = holder[0]
             before = s.tolist()
-            go_on = handler(ta, d_sgn)
+            was = list(body_modes)
+            first = len(records)
+            # Records are handed on (log.on_full) only once the modes after the impact are known.
+            size, log.chunk_size = log.chunk_size, 1 << 62
+            try:
+                go_on = handler(ta, d_sgn)
+            finally:
+                log.chunk_size = size
+            fill_record_modes(log, body_modes, pair_bodies, first)  # any earlier ones: the modes they had
+            kept = ta.pars  # modes brought up to date inside the handler (FrictionModes.sync)
+            kept[:] = holder[1][: len(kept)]
             modes.reconcile(ta, s, ta.time, before)
+            for record in records[first:]:
+                i, j = pair_bodies[record[1]]
+                record_modes.append((was[i], was[j], body_modes[i], body_modes[j]))
+            if len(records) >= size and log.on_full is not None and log.stop.reason != "merge":
+                log.on_full()
             return go_on
 
         return on_impact
@@ -196,7 +216,17 @@ def _with_friction(scene, system, log, holder, friction, handlers, warnings, set
     handlers = [wrapped(h) if n < n_impacts else h for n, h in enumerate(handlers)]
     handlers += [modes.handler(ev) for ev in system.friction_events]
     settle.friction = modes
+    holder[2] = modes  # GapMotion brings the modes up to the rates before judging a contact
     return handlers, warnings, settle
+
+
+def fill_record_modes(log, body_modes, pair_bodies, upto=None) -> None:
+    """Give the records that have no friction modes yet (collisions at the start of a mode, in
+    the settler) the bodies' present modes, before and after, up to record ``upto``."""
+    records, record_modes = log.records, log.record_modes
+    for record in records[len(record_modes): len(records) if upto is None else upto]:
+        i, j = pair_bodies[record[1]]
+        record_modes.append((body_modes[i], body_modes[j], body_modes[i], body_modes[j]))
 
 
 def _strobe_recorder(log, system):
@@ -399,6 +429,39 @@ def _overlap_stopper(log, number, holder, system):
         return False
 
     return stop
+
+
+class GapMotion:
+    """The acceleration and jerk of the gap between two units on the circle, for the contact judgments.
+
+    In a fixed plane without friction or forcing, the closed forms of unit_acceleration and
+    unit_jerk (the rolling pendulum); otherwise the compiled psi'' and its derivative for every
+    unit (SceneSystem.unit_motion) at the state, the mode's parameters and the time (measured:
+    with friction the closed forms judged a pressed pair opening, and its collision went unseen).
+    """
+
+    def __init__(self, system: SceneSystem, holder: list):
+        from .contact_function import motion_function
+
+        self.system, self.holder = system, holder
+        self.function = motion_function(system)
+
+    def __call__(self, s, a: int, b: int, t=0.0, va=None, vb=None) -> tuple[float, float]:
+        system = self.system
+        nu = system.n_units
+        if self.function is None:
+            psi_a, psi_b = float(s[a]), float(s[b])
+            va = float(s[nu + a]) if va is None else va
+            vb = float(s[nu + b]) if vb is None else vb
+            return (unit_acceleration(system, b, psi_b) - unit_acceleration(system, a, psi_a),
+                    unit_jerk(system, b, psi_b, vb) - unit_jerk(system, a, psi_a, va))
+        from .contact_function import evaluate
+
+        modes = self.holder[2] if len(self.holder) > 2 else None
+        if modes is not None:  # a collision has just changed rates: the friction modes first
+            modes.sync(s, t)
+        values = evaluate(self.function, s, self.holder[1], t)
+        return float(values[2 * b] - values[2 * a]), float(values[2 * b + 1] - values[2 * a + 1])
 
 
 def reopening_check(system: SceneSystem, number: int, log: CollisionLog, holder: list, touched: list, settle):
@@ -678,6 +741,7 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     t_bound = (a_i_stiff + a_j_stiff) * (1 - k) * RESOLUTION_ULPS * eps / 2
     reopened = reopening_check(system, number, log, holder, touched, settle) if system.gap_reopening else None
     gap_constant = system.gap_constants[number]
+    motion = GapMotion(system, holder) if system.unit_motion else None
 
     def resolve(s, before, t) -> bool:
         """Apply the law (or the policy) to this pair, record it; False: stop the run.
@@ -736,7 +800,11 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         if gap < 0 and opening * SLOW_REOPENING < -gap:
             settle.lift_gap(s, number)
         pressed = False
-        if opening * opening <= h_bound * (1 + abs(phi_i) + abs(phi_j)) or opening <= t_bound * (abs(t) + time_scale):
+        if motion is not None:  # friction or forcing: the compiled accelerations (GapMotion)
+            gap_acc, gap_jerk = motion(s, i, j, t, float(vi_new), float(vj_new))
+            pressed = below_resolution(opening, gap_acc, k, float(t), 1 + abs(phi_i) + abs(phi_j), time_scale, eps,
+                                       gap_jerk)
+        elif opening * opening <= h_bound * (1 + abs(phi_i) + abs(phi_j)) or opening <= t_bound * (abs(t) + time_scale):
             gap_acc = a_i_stiff * sin(phi_i) - a_j_stiff * sin(phi_j)
             gap_jerk = a_i_stiff * cos(phi_i) * vi_new - a_j_stiff * cos(phi_j) * vj_new
             scale = 1 + abs(phi_i) + abs(phi_j)
@@ -747,7 +815,8 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     return on_collision
 
 
-def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionLog, time_scale: float):
+def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionLog, time_scale: float,
+                    holder: list | None = None):
     """``settle(s, t, units, skip_open=None, skip_merge=()) -> bool``: pairs touching at one instant.
 
     Called after a collision (on the two units it involved: contacts closing
@@ -800,6 +869,7 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
         left_of[c.unit_b] = number
         geometry.append((c.unit_a, c.unit_b, system.gap_constants[number]))
     max_rounds = 64 * system.n_bodies
+    gap_motion = GapMotion(system, holder)
 
     def gap(s, number):
         a, b, constant = geometry[number]
@@ -921,8 +991,7 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                     if v * v > 2 * bound * RESOLUTION_ULPS * eps * scale and \
                             v > bound * (1 - k) * RESOLUTION_ULPS * eps * (abs(float(t)) + time_scale) / 2:
                         continue
-                    acc = unit_acceleration(system, b, pb) - unit_acceleration(system, a, pa)
-                    jerk = unit_jerk(system, b, pb, vb) - unit_jerk(system, a, pa, va)
+                    acc, jerk = gap_motion(s, a, b, t, va, vb)
                     if below_resolution(v, acc, k, float(t), scale, time_scale, eps, jerk):
                         stop.reason, stop.data = "merge", {"contact": number}
                         return False
@@ -962,6 +1031,7 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
     strict = scene.on_inconsistent == "error"
     stop = log.stop
     reopened = reopening_check(system, number, log, holder, touched, settle) if system.gap_reopening else None
+    gap_motion = GapMotion(system, holder)
 
     def resolve(s, t) -> bool:
         """Apply the law (or the policy), record it; False: stop the run (policy, max_collisions)."""
@@ -1005,8 +1075,7 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
         state = [float(x) for x in s.tolist()]
         psi_a, psi_b = state[a], state[b]
         va_new, vb_new = state[nu + a], state[nu + b]
-        gap_acc = unit_acceleration(system, b, psi_b) - unit_acceleration(system, a, psi_a)
-        gap_jerk = unit_jerk(system, b, psi_b, vb_new) - unit_jerk(system, a, psi_a, va_new)
+        gap_acc, gap_jerk = gap_motion(s, a, b, t, va_new, vb_new)
         pressed = below_resolution(
             vb_new - va_new, gap_acc, k, float(t), 1 + abs(psi_a) + abs(psi_b), time_scale, eps, gap_jerk
         )

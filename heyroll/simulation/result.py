@@ -67,6 +67,13 @@ TABLE_COLUMNS = (
 #: Columns of the passages table (junction passages and limiter impacts, see README).
 PASSAGE_COLUMNS = ("n", "t", "body", "kind", "piece_from", "piece_to", "q", "dq_before", "dq_after")
 INTEGER_COLUMNS = ("n", "i", "j", "law_flag")
+#: Rough tracks: the table gains the friction modes of the two bodies before and after each collision.
+MODE_COLUMNS = ("mode_i_before", "mode_j_before", "mode_i_after", "mode_j_after")
+
+
+def table_columns(scene: Scene) -> tuple:
+    """The collision table's columns for ``scene``: TABLE_COLUMNS, then MODE_COLUMNS on a rough track."""
+    return TABLE_COLUMNS + (MODE_COLUMNS if scene.rough else ())
 
 #: Columns of the friction transitions table (rough tracks, see README).
 TRANSITION_COLUMNS = ("n", "t", "body", "from", "to", "q", "dq")
@@ -142,7 +149,7 @@ def rolling_ratios(scene: Scene, q, number=float) -> np.ndarray:
 
 def build_collision_table(
     scene: Scene, pairs, precision: Precision, times, pair_numbers, states_before, states_after,
-    flags=None, *, first_number: int = 1, native: bool = False,
+    flags=None, *, first_number: int = 1, native: bool = False, modes=None,
 ) -> np.ndarray:
     """The collision table (columns TABLE_COLUMNS) of raw collision records.
 
@@ -156,9 +163,15 @@ def build_collision_table(
     n = len(times)
     float_type = object if native else np.float64
     dtype = [(c, np.int64 if c in INTEGER_COLUMNS else float_type) for c in TABLE_COLUMNS]
+    if scene.rough:  # ``modes``: (n, 4) mode names, MODE_COLUMNS
+        dtype += [(c, "U8") for c in MODE_COLUMNS]
     table = np.zeros(n, dtype=dtype)
     if n == 0:
         return table
+    if scene.rough and modes is not None:
+        modes = np.asarray(modes).reshape(n, len(MODE_COLUMNS))
+        for c, name in enumerate(MODE_COLUMNS):
+            table[name] = modes[:, c]
     nb = len(scene.bodies)
     before, after = as_array(states_before), as_array(states_after)
     i = np.array([p.i for p in pairs], dtype=np.int64)[pair_numbers]
@@ -255,6 +268,8 @@ class SimulationResult:
     #: Rough tracks: every change of a body's friction mode, (t, body (0-based), from, to, q, q')
     #: (see transition_table); each body's mode and slip velocity w (m/s) at the end.
     transitions: tuple = ()
+    #: Rough tracks: per kept collision the modes of bodies i and j before and after it (MODE_COLUMNS).
+    collision_modes: np.ndarray | None = None
     final_modes: tuple = ()
     final_slip: tuple = ()
     #: The work friction dissipated on each body (J; a cluster's on its first member), integrated
@@ -383,7 +398,7 @@ class SimulationResult:
         """
         return build_collision_table(
             self.scene, self.pairs, self.precision, self.times, self.pair_numbers,
-            self.states_before, self.states_after, self.law_flags, native=native,
+            self.states_before, self.states_after, self.law_flags, native=native, modes=self.collision_modes,
         )
 
     def summary(self) -> dict:

@@ -203,6 +203,9 @@ class SceneSystem:
     strobe_expression: object = None
     #: What else the compiled code depends on: friction (sides, frame), forcing (kind, bodies).
     extra_shape: tuple = ()
+    #: The circle with friction or forcing: per unit [psi'', psi'''] as expressions (the contact
+    #: judgments' gap acceleration and jerk, which the closed forms of unit_acceleration miss).
+    unit_motion: list = field(default_factory=list)
 
     @property
     def per_body(self) -> bool:
@@ -482,6 +485,11 @@ def build_system(
             fixed.append(dataclasses.replace(block, rate=rate, slip=slip,
                                              work=2 * nc + len(slip_vars) + len(fixed)))
         friction_blocks = tuple(fixed)
+        # A fifth value per block: the derivative of the rate that turns (q'' of a particle or a
+        # cluster, w' of a slipping body), for the time-resolution test of resolve.friction.
+        slip_rates = iter(eq[1] for eq in slip_eqs)
+        friction_values = [list(v) + [next(slip_rates) if block.rolls else accelerations[block.rate - nc]]
+                           for v, block in zip(friction_values, friction_blocks)]
         if events:
             evs, friction_exprs = friction_events(
                 scene, friction_blocks, friction_values,
@@ -606,6 +614,13 @@ def build_system(
         used = [int(m) for eq in equations for m in re.findall(r"\bp(\d+)\b", str(eq[1]))]
         del params[max(used, default=-1) + 1:]
     slip_start = [num(0)] * (len(slip_vars) + len(work_vars))
+    unit_motion = []
+    if not per_body and events and (rough or scene.forcing is not None):
+        for u in range(nu):
+            acc = accelerations[u]
+            jerk = hy.sum([hy.diff(acc, psi[c]) * dpsi[c] + hy.diff(acc, dpsi[c]) * accelerations[c]
+                           for c in range(nu)])
+            unit_motion.append([acc, jerk])
     return SceneSystem(
         initial_state=(start + rates if per_body
                        else [start[u.members[0]] for u in units] + [rates[u.members[0]] for u in units]) + slip_start,
@@ -645,6 +660,7 @@ def build_system(
         friction_values=friction_values,
         n_extra=len(slip_vars) + len(work_vars),
         strobe_expression=strobe,
+        unit_motion=unit_motion,
         extra_shape=(rough, scene.track_sides if rough else "",
                      None if scene.forcing is None else (scene.forcing.kind, scene.forcing.bodies)),
     )

@@ -26,7 +26,6 @@ from rolling (w = 0) is therefore not taken for a new turning point.
 from __future__ import annotations
 
 import heyoka as hy
-import numpy as np
 
 from ..compiled_cache import CompiledCache
 from ..contact_function import evaluate
@@ -34,8 +33,12 @@ from ..friction import MODES
 
 _COMPILED = CompiledCache(64)
 
-#: Values per friction block in its compiled function: load, static capacity, sigma, N_in (signed).
-BLOCK_VALUES = 4
+#: Values per friction block in its compiled function: load, static capacity, sigma, N_in (signed),
+#: and the derivative of the rate that turns (q'', or a slipping body's w').
+BLOCK_VALUES = 5
+
+#: Resolution of a run, in ulps of its time (as for persistent contacts, events.RESOLUTION_ULPS).
+RESOLUTION_ULPS = 64
 
 
 class FrictionState:
@@ -87,8 +90,10 @@ def block_mode(system, block, pars) -> str:
 class FrictionModes:
     """The friction callbacks of one contact mode (see :func:`make_friction_handlers`)."""
 
-    def __init__(self, scene, system, state: FrictionState, holder, log):
+    def __init__(self, scene, system, state: FrictionState, holder, log, time_scale: float = 1.0):
         self.scene, self.system, self.state, self.holder, self.log = scene, system, state, holder, log
+        self.time_scale = time_scale
+        self.eps = system.precision.epsilon
         self.function = friction_function(system)
         self.num = system.precision.number
         self.zero, self.one = self.num(0), self.num(1)
@@ -97,6 +102,8 @@ class FrictionModes:
 
     def _set(self, ta, index, value) -> None:
         self.holder[1][index] = value
+        if ta is None:  # (FrictionModes.sync: the impact's wrapper copies them into the integrator)
+            return
         kept = ta.pars
         if index < len(kept):
             kept[index] = value
@@ -109,14 +116,18 @@ class FrictionModes:
         n = self.system.n_bodies
         return full[k], full[n + k]
 
-    def _note(self, t, s, block, new: str, record: bool = True) -> None:
-        """The block's members pass to mode ``new`` (rolling members of a cluster roll, or are stuck)."""
+    def _note(self, t, s, block, new: str, record: bool = True, at=None) -> None:
+        """The block's members pass to mode ``new`` (rolling members of a cluster roll, or are stuck);
+        ``at``: the state whose positions to record (an impact's, before a limiter moved the body off
+        its stop by a few ulps)."""
         for k in block.members:
             target = new
             if not block.rolls and self.scene.bodies[k].kappa != 1:
                 target = "stuck" if new == "stuck" else "rolling"
             if record:
                 q, dq = self._where(s, k)
+                if at is not None:
+                    q = self._where(at, k)[0]
                 work = self.state.work[block.members[0]] + float(s[block.work])
                 self.state.record(t, k, self.state.modes[k], target, q, dq, work)
             self.state.modes[k] = target
@@ -177,9 +188,61 @@ class FrictionModes:
             self.apply(ta, block, new)
             self._note(t, s, block, new)
             self.log.friction_transitions += 1
+            self.settle(ta, s, t)  # units turning at the same instant (bodies moving together)
             return not self.log.events_exhausted()
 
         return on_event
+
+    def settle(self, ta, s, t) -> None:
+        """Units whose turning point (q' = 0, or a slip w = 0) is nearer than the run's time
+        resolution: decided now, as at their turning point. heyoka cannot see a root that close
+        to the start of a step (measured: a particle left sliding at 5e-25 m/s by a plastic
+        collision went on with friction pushing it the wrong way)."""
+        system = self.system
+        pars = self.holder[1]
+        values = None
+        horizon = RESOLUTION_ULPS * self.eps * (abs(float(t)) + self.time_scale)
+        for b, block in enumerate(system.friction_blocks):
+            mode = block_mode(system, block, pars)
+            if mode in ("stuck", "rolling"):
+                continue
+            rate = float(s[block.slip] if block.rolls else s[block.rate])
+            if values is None:
+                values = self._evaluate(s, t)
+            acc = float(values[BLOCK_VALUES * b + 4])
+            sign = 1 if mode == "sliding+" else -1
+            # At rest and pushed along the mode's direction: a restart (release, slip onset); at rest
+            # and not: decided now. Moving: turning within the resolution, or turned already (its
+            # rate against the mode's sign: two units that turn in one step, the event of the first
+            # stops the step past the second's root, measured): decided now.
+            if (acc * sign <= 0) if rate == 0 else (
+                    rate * sign < 0 or (rate * acc < 0 and abs(rate) <= abs(acc) * horizon)):
+                new = self.at_rest(ta, s, t, b)
+                if new != mode:
+                    self.apply(ta, block, new)
+                    self._note(t, s, block, new)
+                    self.log.friction_transitions += 1
+                values = None
+
+    def sync(self, s, t) -> None:
+        """Inside a collision's callback, before its contact is judged: particles' and clusters'
+        modes follow their new rates (a stuck unit that is hit slides; measured: judged with the
+        stuck unit's zero acceleration, a pressed pair was let open and its collision went unseen).
+        The integrator's parameters are brought up to date after the callback; slips in reconcile."""
+        system = self.system
+        pars = self.holder[1]
+        for b, block in enumerate(system.friction_blocks):
+            if block.rolls:
+                continue
+            rate = s[block.rate]
+            old = block_mode(system, block, pars)
+            if rate == 0:
+                continue
+            new = "sliding+" if rate > 0 else "sliding-"
+            if new != old:
+                self.apply(None, block, new)
+                self._note(t, s, block, new)
+                self.log.friction_transitions += 1
 
     def reconcile(self, ta, s, t, before) -> None:
         """After impacts (collisions, limiters) that changed rates from ``before``: each block's
@@ -208,8 +271,9 @@ class FrictionModes:
                 new = "sliding+" if rate > 0 else "sliding-"
             if new != old:
                 self.apply(ta, block, new)
-                self._note(t, s, block, new)
+                self._note(t, s, block, new, at=before)
                 self.log.friction_transitions += 1
+        self.settle(ta, s, t)
 
     def start(self, ta, s, t, record: bool = True) -> None:
         """At the start of a contact mode: the blocks' parameters from the run's modes and state
@@ -235,6 +299,7 @@ class FrictionModes:
                 self._set(ta, block.side, -self.one if normal < 0 else self.one)
             self.apply(ta, block, mode)
             self._note(t, s, block, mode, record)
+        self.settle(ta, s, t)
 
     def finish(self, s) -> None:
         """Keep the slip velocities for the next contact mode."""
