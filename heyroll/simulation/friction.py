@@ -86,7 +86,8 @@ def slides(body) -> bool:
 
 
 def normal_magnitude(scene, term, q, v, side, par):
-    """N per unit mass: see the module doc (``side`` is the two-sided track's parameter, or None)."""
+    """N per unit mass: see the module doc (``side`` is the two-sided track's parameter, or None;
+    ``q`` the state variable the centre's position depends on)."""
     if scene.frame.rotating:
         with workprec():
             four_omega2 = 4 * scene.frame.omega**2
@@ -101,7 +102,8 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
     ``terms[k]``: body k's BodyTerms (rolling, forcing included); ``slide_terms(k)``: the same
     with kappa = 1 (a rolling body's centre while it slips); ``q_of(k)``, ``v_of(k)``: the
     expressions of body k's coordinate and rate; ``slip_vars``: a new state variable per
-    rolling free body, in unit order. Returns
+    rolling free body, in unit order. (``q_of(k)`` is the state variable body k's position depends
+    on: a cluster member's position is psi + o.) Returns
     ``(blocks, body_acc, slip_equations, unit_sums, values)`` with ``body_acc[k]`` body k's
     q'' with friction (free units and per-body clusters), ``unit_sums[u]`` = ({member: its
     generalized friction force -s mu m N sigma}, the stuck parameter) of a cluster on the circle, ``values`` per block

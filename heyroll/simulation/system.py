@@ -399,12 +399,13 @@ def build_system(
             blocks.append(PieceBlock(body=k, lower=first, first=first + 2, size=len(values)))
     dyn = Dynamics(g=g, frame=scene.frame, par=par)
 
-    def body_terms(k, q, v, sliding=False):
-        """Body k's terms (forcing included); ``sliding``: its centre as a particle's (kappa = 1)."""
+    def body_terms(k, q, v, sliding=False, variable=None):
+        """Body k's terms (forcing included); ``sliding``: its centre as a particle's (kappa = 1);
+        ``variable``: the state variable q depends on (a cluster member's q is psi + o)."""
         block = blocks[k] if blocks else None
         body = dataclasses.replace(scene.bodies[k], kappa=mpmath.mpf(1)) if sliding else scene.bodies[k]
         term = track.terms(body, q, v, dyn, lambda m: hy.par[block.first + m])
-        return forcing_terms(scene, k, term, q, body.kappa, par)
+        return forcing_terms(scene, k, term, q if variable is None else variable, body.kappa, par)
 
     rough = scene.rough
     n_rolls = sum(1 for u in units if len(u.members) == 1 and not slides(scene.bodies[u.members[0]])) if rough else 0
@@ -424,7 +425,7 @@ def build_system(
                 if unit.is_cluster and not rough:  # a cluster's equation is its own (below)
                     continue
                 for k, o in zip(unit.members, unit.offsets):
-                    terms[k] = body_terms(k, psi[u] + par(o) if unit.is_cluster else psi[u], dpsi[u])
+                    terms[k] = body_terms(k, psi[u] + par(o) if unit.is_cluster else psi[u], dpsi[u], variable=psi[u])
         if rough:
             def coordinate(k):
                 return k if per_body else unit_of[k]
@@ -436,8 +437,8 @@ def build_system(
 
             friction = build_friction(
                 scene, units, per_body, terms,
-                lambda k: body_terms(k, position(k), dpsi[coordinate(k)], sliding=True),
-                position, lambda k: dpsi[coordinate(k)], par, slip_vars)
+                lambda k: body_terms(k, position(k), dpsi[coordinate(k)], sliding=True, variable=psi[coordinate(k)]),
+                lambda k: psi[coordinate(k)], lambda k: dpsi[coordinate(k)], par, slip_vars)
             for k, acc in friction[1].items():
                 terms[k] = dataclasses.replace(terms[k], acceleration=acc)
         if per_body:
@@ -849,7 +850,7 @@ def _track_events(scene: Scene, units, psi, dpsi, par, body_terms, free_terms):
             slips = mu is not None and body.kappa > 1 and unit.is_cluster
             if not (reach_top_half or slips):
                 continue
-            terms = body_terms(k, psi[u] + par(o), dpsi[u]) if unit.is_cluster else free_terms[k]
+            terms = body_terms(k, psi[u] + par(o), dpsi[u], variable=psi[u]) if unit.is_cluster else free_terms[k]
             if reach_top_half:
                 events.append(TrackEvent(body=k, kind="left_track", terminal=scene.track_sides == "one"))
                 exprs.append(terms.normal)
