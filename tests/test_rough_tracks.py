@@ -475,3 +475,78 @@ def test_a_sliding_particle_never_moves_against_its_mode_and_a_stuck_one_never_m
                 assert v <= scale
             else:
                 assert abs(v) <= scale
+
+
+# -- regressions found by review (issue 15) ----------------------------------------------------------------
+
+
+def test_a_cascade_at_a_modes_start_reaches_the_integrators_friction_signs():
+    """Eight particles, plastic: a cascade of cluster collisions at the start of a contact mode
+    reversed a cluster; its recorded mode changed but the integrator's sign parameter did not, and
+    friction pushed it along its motion (negative friction work) for 0.24 s."""
+    bodies = [Body.of_shape("particle", 0, mass=1 + i % 3) for i in range(8)]
+    scene = Scene.make(CircleTrack.of_radius(1), bodies, [-2.8 + i * 0.7 for i in range(8)], [3, -2, 1, 0, 2, -3, 1, -1],
+                       law=make_law("newton", "0"), friction="0.1", static_friction="0.2", run=RunSettings.make(10))
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED, result.message
+    assert all(w >= 0 for w in result.friction_work)
+    table = result.collision_table()
+    impacts = float((table["energy_before"] - table["energy_after"]).sum())
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work) + impacts, rel=1e-11)
+
+
+def test_a_particle_held_on_a_two_sided_incline_stays_through_weightlessness():
+    """Vertical base motion with A nu^2 = 20 > g: the effective gravity passes through 0, load and static
+    capacity vanish together (their ratio is tan alpha = 0.1 < mu_s): it stays stuck. Before: released at
+    N = 0 and run away with friction doing positive work."""
+    forcing = Forcing.make("base", amplitude="0.2", frequency=10, direction=math.pi / 2)
+    scene = Scene.make(CurveTrack.make("0.1*x", -20, 20), [PARTICLE], [0], [0], friction="0.2", static_friction="0.3",
+                       forcing=forcing, track_sides="two", run=RunSettings.make(2))
+    result = simulate(scene)
+    assert result.final_modes == ("stuck",) and float(result.final_state[0]) == 0.0
+    assert result.friction_work == (0.0,)
+
+
+@pytest.mark.parametrize("precision", ["long", "quad", "mp:128"])
+def test_a_forced_rough_scene_runs_in_every_precision(precision):
+    scene = Scene.make(CurveTrack.make("x**2/2", -3, 3), [PARTICLE], [0], [0], friction="0.1", static_friction="0.2",
+                       forcing=Forcing.make("force", amplitude=2, frequency=2), track_sides="one",
+                       run=RunSettings.make(2))
+    double, other = simulate(scene), simulate(scene, precision=precision)
+    assert other.status is Status.COMPLETED
+    assert [r[2:4] for r in other.transitions] == [r[2:4] for r in double.transitions]
+    for a, b in zip(other.transitions, double.transitions):
+        assert float(a[0]) == pytest.approx(float(b[0]), abs=1e-13)
+
+
+@pytest.mark.parametrize("k", ["1", "0.5"])
+def test_the_collision_tables_energies_count_a_slipping_bodys_spin(k):
+    """A disk slipping without spin hits a particle: the impulse through its centre leaves its spin, and
+    the table's energies are the bodies' whole kinetic and potential energy (before: the rolling form)."""
+    disk = Body.of_shape("disk", "0.1", mass=1)
+    scene = Scene.make(CurveTrack.make("0*x", -50, 50), [disk, PARTICLE], [0, "0.5"], [2, 0], slip=[2.0, 0],
+                       law=make_law("newton", k), friction="0.01", track_sides="one", run=RunSettings.make(1))
+    result = simulate(scene)
+    (row,) = result.collision_table()
+    assert row["mode_i_before"] == "sliding+"
+    lost = float(row["energy_before"] - row["energy_after"])
+    assert lost == pytest.approx(-float(row["law_energy_change"]), abs=1e-14)  # Newton's loss, translation only
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work) + lost, rel=1e-12)
+
+
+def test_a_particle_meets_a_disk_at_its_contact_point_and_never_passes_it():
+    """The distance between the centres minus r only touches 0 where a particle reaches a disk's contact
+    point: the particle passed under the disk on the cycloid, unseen. Now the gap of such a pair is the
+    difference of their contact coordinates."""
+    track = ParametricTrack.make("u - sin(u)", "1 + cos(u)", "0.5", "5.78")
+    scene = Scene.make(track, [PARTICLE, Body.of_shape("disk", "0.05", mass=1)], ["1.2", "4.4"], [0, 0],
+                       law=make_law("newton", "0.6"), friction="0.08", static_friction="0.12", track_sides="one",
+                       limiter_restitution="0.5", run=RunSettings.make(4))
+    result = simulate(scene, dense=True)
+    assert result.status is Status.COMPLETED and result.n_collisions >= 1
+    states = result.states_at(np.linspace(0, 4, 8001))
+    assert np.min(states[:, 1] - states[:, 0]) >= -1e-12
+    with pytest.raises(SceneError) as info:
+        Scene.make(ArcChainTrack.make([Segment("line", angle=mpmath.mpf(0), length=mpmath.mpf(2))], 0, 0),
+                   [PARTICLE, DISK], ["0.2", "1"], [0, 0], law=make_law("newton", 1))
+    assert info.value.field == "bodies[2].shape"

@@ -75,6 +75,7 @@ class _TableFile:
         table = build_collision_table(
             self.scene, self.pairs, self.precision, times, numbers, before, after, flags,
             first_number=first_number, native=True, modes=chunk[5] if len(chunk) > 5 else None,
+            spins=chunk[6] if len(chunk) > 6 else None,
         )
         self._append(table)
         self.rows += table.size
@@ -236,7 +237,8 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
         sink = table_sink(out_dir, "csv")
         sink.open(result.scene, result.pairs, result.precision)
         chunk = (result.times, result.pair_numbers, result.states_before, result.states_after, result.law_flags)
-        sink.write(chunk if result.collision_modes is None else chunk + (result.collision_modes,), 1)
+        sink.write(chunk if result.collision_modes is None else chunk + (result.collision_modes, result.collision_spins),
+                   1)
         if sink.passages_path:
             sink.write_passages(result.passage_table())
         sink.close()

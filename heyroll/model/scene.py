@@ -272,12 +272,28 @@ class Scene:
         """Centre (x_C, y_C) of body n at coordinate(s) q, float64."""
         return self.track.centre(self.bodies[n], q)
 
+    def point_contact(self, i: int, j: int) -> bool:
+        """Whether bodies i and j meet at a point of the track: two particles, or a particle and a
+        rolling body on a track whose coordinate is the contact point (a curve, a parametric curve).
+
+        A particle slides on the track itself and a rolling body fits the track's curvature, so the
+        particle reaches the body's surface only at the body's contact point, where the two
+        surfaces are tangent: the distance between the centres minus r_i + r_j touches 0 there
+        without changing sign (found by review: a particle passed under a disk on the cycloid,
+        unseen). Such a pair's gap is the signed difference of the contact coordinates.
+        """
+        bi, bj = self.bodies[i], self.bodies[j]
+        return (bi.is_particle and bj.is_particle) or (
+            (bi.is_particle or bj.is_particle) and self.track.coordinate in ("x", "u"))
+
     def gap(self, i: int, j: int, q_i, q_j):
         """Distance between the surfaces of bodies i and j at coordinates q_i, q_j (m), float64."""
         xi, yi = self.centre(i, q_i)
         xj, yj = self.centre(j, q_j)
         d = float(self.bodies[i].radius + self.bodies[j].radius)
-        if d == 0:  # two particles on one curve: a signed distance along it
+        if self.point_contact(i, j):  # a signed distance along the track (between the contact points)
+            xi, yi = self.track.centre(Body.of_shape("particle", 0, mass=1), q_i)
+            xj, yj = self.track.centre(Body.of_shape("particle", 0, mass=1), q_j)
             return np.sign(np.asarray(q_j, float) - np.asarray(q_i, float)) * np.hypot(xj - xi, yj - yi)
         return np.hypot(xj - xi, yj - yi) - d
 
@@ -297,6 +313,11 @@ class Scene:
         pairs = []
         for i in range(len(self.bodies) - 1):
             j = i + 1
+            if self.bodies[i].is_particle != self.bodies[j].is_particle and self.track.coordinate == "s":
+                raise SceneError(f"bodies[{j + 1}].shape",
+                                 "a particle beside a rolling body on an arc chain is not modelled: they meet at "
+                                 "the rolling body's contact point, and the chain's coordinates (arc lengths of "
+                                 "each centre's path) do not compare; use a curve or a parametric track")
             if not self.q[i] < self.q[j]:
                 raise SceneError(f"bodies[{j + 1}].{c}",
                                  "bodies must be listed in order along the track (increasing coordinate)")

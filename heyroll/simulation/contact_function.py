@@ -71,9 +71,14 @@ def evaluate(function, state, pars, t=0.0):
     at time ``t`` (forced systems). A state without the slip velocities of a rough track's
     rolling bodies (a full state, or a reduced one) is taken as rolling: slips 0."""
     state = np.asarray(state)
+    # Zeros and the time in the state's own number type and precision (heyoka's real128 and real
+    # dtypes: np.zeros of the real dtype made reals of precision 2, measured).
+    zero = state.flat[0] * 0
     if state.size < function.nvars:
-        state = np.concatenate([state, np.zeros(function.nvars - state.size, dtype=state.dtype)])
-    kwargs = {"time": t} if function.is_time_dependent else {}
+        state = np.concatenate([state, np.array([zero] * (function.nvars - state.size), dtype=state.dtype)])
+    kwargs = {}
+    if function.is_time_dependent:
+        kwargs["time"] = t if isinstance(t, type(zero)) else zero + t
     if function.nparams == 0:
         return function(state, **kwargs)
     return function(state, pars=np.asarray(pars)[: function.nparams], **kwargs)

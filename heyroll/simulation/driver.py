@@ -283,6 +283,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         settled = settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
         if friction_modes is not None:  # the modes follow the rates collisions at the mode's start left
             fill_record_modes(log, friction.modes, stream.pair_bodies)
+            kept = ta.pars  # modes synced by the settler's collisions (FrictionModes.sync: holder only)
+            kept[:] = holder[1][: len(kept)]
             friction_modes.reconcile(ta, ta.state, ta.time, rates_before)
         if settled:
             full_state = system.expand(ta.state.tolist())
@@ -411,6 +413,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         mode_changes=tuple(modes),
         transitions=tuple(friction.transitions) if friction is not None else (),
         collision_modes=kept[5] if len(kept) > 5 else None,
+        collision_spins=kept[6] if len(kept) > 6 else None,
         final_modes=tuple(friction.modes) if friction is not None else (),
         final_slip=tuple(friction.slips) if friction is not None else (),
         friction_work=tuple(friction.work) if friction is not None else (),
@@ -648,8 +651,10 @@ def records_to_arrays(records: list, n_bodies: int, modes: list | None = None) -
     None, full state after, flag) when clusters move.
     """
     n, nb = len(records), n_bodies
-    # Rough tracks: a sixth array, the friction modes of each collision's bodies (events.CollisionLog.record_modes).
-    extra = () if modes is None else (np.array(modes, dtype="U8").reshape(n, 4),)
+    # Rough tracks: a sixth and a seventh array, the friction modes of each collision's bodies and
+    # the speeds their spins would roll at where they slip (events.CollisionLog.record_modes).
+    extra = () if modes is None else (np.array([m[:4] for m in modes], dtype="U8").reshape(n, 4),
+                                      np.array([m[4:] for m in modes], dtype=float).reshape(n, 2))
     if not n:
         empty = np.zeros((0, 2 * nb))
         return (np.zeros(0), np.zeros(0, dtype=np.int64), empty, empty.copy(), np.zeros(0, dtype=np.int64)) + extra

@@ -101,7 +101,8 @@ class CollisionLog:
     #: and the stroboscopic section's samples: (t, full state) once a forcing period.
     friction_transitions: int = 0
     strobe: list = field(default_factory=list)
-    #: Rough tracks: per record, the friction modes of its bodies i, j before and after (else None).
+    #: Rough tracks: per record, the friction modes of its bodies i, j before and after, and the
+    #: speeds u_i, u_j their spins would roll at where they slip (nan where they roll) (else None).
     record_modes: list | None = None
 
     def record_passage(self, row: tuple) -> bool:
@@ -180,13 +181,26 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
         warnings = warnings + [_strobe_recorder(log, system)]
     if not system.friction_blocks:
         return handlers, warnings, settle
-    from .resolve.friction import FrictionModes
+    from .resolve.friction import BLOCK_VALUES, FrictionModes
 
     modes = FrictionModes(scene, system, friction, holder, log, time_scale)
     n_impacts = len(system.contacts) + len(system.link_expressions) + len(system.bound_expressions)
 
     records, record_modes, body_modes = log.records, log.record_modes, friction.modes
     pair_bodies = [(p.i, p.j) for p in scene.pairs]
+    # A slipping body's spin is unchanged by an impulse through its centre: u = sigma q' - w before.
+    slipping = {block.members[0]: (b, block) for b, block in enumerate(system.friction_blocks) if block.rolls}
+
+    def spin(k, before) -> float:
+        if k not in slipping or body_modes_before[k] == "rolling":
+            return math.nan
+        b, block = slipping[k]
+        sigma = float(modes._evaluate(before_array[0], before_time[0])[BLOCK_VALUES * b + 2])
+        return sigma * float(before[block.rate]) - float(before[block.slip])
+
+    body_modes_before: list = []
+    before_array: list = [None]
+    before_time: list = [0.0]
 
     def wrapped(handler):
         def on_impact(ta, d_sgn):
@@ -194,6 +208,9 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
             before = s.tolist()
             was = list(body_modes)
             first = len(records)
+            if slipping:
+                body_modes_before[:] = was
+                before_array[0], before_time[0] = s.copy(), ta.time
             # Records are handed on (log.on_full) only once the modes after the impact are known.
             size, log.chunk_size = log.chunk_size, 1 << 62
             try:
@@ -206,7 +223,8 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
             modes.reconcile(ta, s, ta.time, before)
             for record in records[first:]:
                 i, j = pair_bodies[record[1]]
-                record_modes.append((was[i], was[j], body_modes[i], body_modes[j]))
+                spins = (spin(i, before), spin(j, before)) if slipping else (math.nan, math.nan)
+                record_modes.append((was[i], was[j], body_modes[i], body_modes[j]) + spins)
             if len(records) >= size and log.on_full is not None and log.stop.reason != "merge":
                 log.on_full()
             return go_on
@@ -226,7 +244,7 @@ def fill_record_modes(log, body_modes, pair_bodies, upto=None) -> None:
     records, record_modes = log.records, log.record_modes
     for record in records[len(record_modes): len(records) if upto is None else upto]:
         i, j = pair_bodies[record[1]]
-        record_modes.append((body_modes[i], body_modes[j], body_modes[i], body_modes[j]))
+        record_modes.append((body_modes[i], body_modes[j], body_modes[i], body_modes[j], math.nan, math.nan))
 
 
 def _strobe_recorder(log, system):

@@ -149,7 +149,7 @@ def rolling_ratios(scene: Scene, q, number=float) -> np.ndarray:
 
 def build_collision_table(
     scene: Scene, pairs, precision: Precision, times, pair_numbers, states_before, states_after,
-    flags=None, *, first_number: int = 1, native: bool = False, modes=None,
+    flags=None, *, first_number: int = 1, native: bool = False, modes=None, spins=None,
 ) -> np.ndarray:
     """The collision table (columns TABLE_COLUMNS) of raw collision records.
 
@@ -189,6 +189,20 @@ def build_collision_table(
         table[f"omega_{side}_after"] = ratio[rows, idx] * after[rows, nb + idx]
     table["energy_before"] = state_energies(scene, before, number).sum(axis=1)
     table["energy_after"] = state_energies(scene, after, number).sum(axis=1)
+    if scene.rough and spins is not None:
+        # A slipping body's kinetic energy is 1/2 m v^2 + 1/2 m (kappa - 1) u^2, not the rolling
+        # 1/2 kappa m v^2: the difference, with its spin's u unchanged through the impact.
+        spins = np.asarray(spins, dtype=float).reshape(n, 2)
+        for side, idx, col in (("i", i, 0), ("j", j, 1)):
+            for r in np.flatnonzero(~np.isnan(spins[:, col])):
+                k = int(idx[r])
+                body = scene.bodies[k]
+                sigma = float(scene.track.sigma(body, float(before[r, k])))
+                share = 0.5 * float(body.mass) * (float(body.kappa) - 1)
+                u = spins[r, col]
+                for name, state in (("energy_before", before), ("energy_after", after)):
+                    v = sigma * float(state[r, nb + k])
+                    table[name][r] = table[name][r] + number(share * (u * u - v * v))
     impulse, change = _law_quantities(scene, i, j, before[rows, i], before[rows, j], before[rows, nb + i],
                                       before[rows, nb + j], number)
     table["law_impulse"], table["law_energy_change"] = impulse, change
@@ -268,8 +282,10 @@ class SimulationResult:
     #: Rough tracks: every change of a body's friction mode, (t, body (0-based), from, to, q, q')
     #: (see transition_table); each body's mode and slip velocity w (m/s) at the end.
     transitions: tuple = ()
-    #: Rough tracks: per kept collision the modes of bodies i and j before and after it (MODE_COLUMNS).
+    #: Rough tracks: per kept collision the modes of bodies i and j before and after it (MODE_COLUMNS),
+    #: and the speeds u_i, u_j their spins roll at where they slip (nan: rolling; the table's energies).
     collision_modes: np.ndarray | None = None
+    collision_spins: np.ndarray | None = None
     final_modes: tuple = ()
     final_slip: tuple = ()
     #: The work friction dissipated on each body (J; a cluster's on its first member), integrated
@@ -399,6 +415,7 @@ class SimulationResult:
         return build_collision_table(
             self.scene, self.pairs, self.precision, self.times, self.pair_numbers,
             self.states_before, self.states_after, self.law_flags, native=native, modes=self.collision_modes,
+            spins=self.collision_spins,
         )
 
     def summary(self) -> dict:

@@ -537,7 +537,7 @@ def build_system(
                 # 384k steps against 229k on one arc equal to the default circle).
                 with workprec():  # at the model's precision, not mpmath's global one (quad runs need it)
                     d = scene.bodies[i].radius + scene.bodies[j].radius
-                if d == 0:
+                if scene.point_contact(i, j):
                     gaps.append(gap)
                     guards.append(gap + par(OVERLAP_FLOOR) * (1 + psi[j] * psi[j]))
                 else:
@@ -685,10 +685,11 @@ def piece_bounds(track, body, piece: int):
 
 
 def _gap(scene, i, j, ti, tj, qi, qj, par):
-    """Distance between the surfaces of bodies i and j (m); q_j - q_i for two particles."""
+    """Distance between the surfaces of bodies i and j (m); q_j - q_i where they meet at a point of
+    the track (two particles, a particle and a rolling body: Scene.point_contact)."""
     with workprec():  # at the model's precision, not mpmath's global one (quad runs need it)
         d = scene.bodies[i].radius + scene.bodies[j].radius
-    if d == 0:  # two points of one curve: a signed gap along it
+    if scene.point_contact(i, j):  # two points of one curve: a signed gap along it
         return qj - qi
     dx, dy = tj.x_c - ti.x_c, tj.y_c - ti.y_c
     return hy.sqrt(dx * dx + dy * dy) - par(d)
@@ -794,9 +795,7 @@ def _link_constraint(scene, i, j, terms, q, v, acc, par):
     With D = C_j - C_i: h' = 2 D.D', h'' = 2 (D'.D' + D.D''), D' = C_j' q_j' - C_i' q_i',
     D'' = C_j'' q_j'^2 + C_j' q_j'' - (i). Two particles (r = 0) keep q_j - q_i = 0.
     """
-    with workprec():  # at the model's precision, not mpmath's global one (quad runs need it)
-        d = scene.bodies[i].radius + scene.bodies[j].radius
-    if d == 0:
+    if scene.point_contact(i, j):
         return q[j] - q[i], -1.0, 1.0, v[j] - v[i], acc[j] - acc[i]
     (xi1, yi1), (xi2, yi2) = _centre_derivatives(terms[i], q[i])
     (xj1, yj1), (xj2, yj2) = _centre_derivatives(terms[j], q[j])
@@ -804,7 +803,8 @@ def _link_constraint(scene, i, j, terms, q, v, acc, par):
     Vx, Vy = xj1 * v[j] - xi1 * v[i], yj1 * v[j] - yi1 * v[i]
     Ax = xj2 * v[j] * v[j] + xj1 * acc[j] - xi2 * v[i] * v[i] - xi1 * acc[i]
     Ay = yj2 * v[j] * v[j] + yj1 * acc[j] - yi2 * v[i] * v[i] - yi1 * acc[i]
-    with workprec():
+    with workprec():  # at the model's precision, not mpmath's global one (quad runs need it)
+        d = scene.bodies[i].radius + scene.bodies[j].radius
         d2 = d * d
     h = Dx * Dx + Dy * Dy - par(d2)
     hi, hj = -2.0 * (Dx * xi1 + Dy * yi1), 2.0 * (Dx * xj1 + Dy * yj1)

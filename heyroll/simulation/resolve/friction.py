@@ -40,6 +40,14 @@ BLOCK_VALUES = 5
 #: Resolution of a run, in ulps of its time (as for persistent contacts, events.RESOLUTION_ULPS).
 RESOLUTION_ULPS = 64
 
+#: A unit set going from rest (a release, a slip onset) starts this many ulps (of its rate's scale)
+#: along its new direction, not at 0.0: heyoka does not see a root of an event function that is
+#: exactly 0.0 at the start of a step, so a unit that the forces then turn back at once (the load
+#: reversing at the instant of release) would slide on against its mode unseen (found by review:
+#: friction doing positive work); a few ulps off zero, its turning point is an ordinary root. As
+#: the settler opens touching gaps by a few ulps (events.OPEN_ULPS): far below the resolution.
+START_ULPS = 8
+
 
 class FrictionState:
     """Every body's friction mode and slip velocity in a run (kept across contact modes)."""
@@ -94,6 +102,9 @@ class FrictionModes:
         self.scene, self.system, self.state, self.holder, self.log = scene, system, state, holder, log
         self.time_scale = time_scale
         self.eps = system.precision.epsilon
+        g = float(scene.g)
+        #: Per block: its weight, sum of m g (times sigma: the scale of its generalized loads).
+        self.weights = [g * sum(float(scene.bodies[k].mass) for k in block.members) for block in system.friction_blocks]
         self.function = friction_function(system)
         self.num = system.precision.number
         self.zero, self.one = self.num(0), self.num(1)
@@ -143,11 +154,17 @@ class FrictionModes:
 
     # -- decisions -------------------------------------------------------------------------
 
-    def _holds(self, s, t, b) -> tuple[bool, float]:
-        """(static friction holds the block, the load's sign) at state s."""
+    def _holds(self, s, t, b, weightless: bool = False):
+        """(static friction holds the block, the load's sign) at state s. The capacity is taken on
+        the reaction's magnitude: on a two-sided track the side parameter may lag an instant where
+        N changes sign (events at one instant), where mu_s side N_in < 0 is no release.
+        ``weightless``: also whether the capacity is below the rounding of the loads (the reaction
+        passing through zero: load and capacity vanish together and their ratio is noise)."""
         values = self._evaluate(s, t)
         load, capacity = values[BLOCK_VALUES * b], values[BLOCK_VALUES * b + 1]
-        return abs(load) <= capacity, (1 if load > 0 else -1)
+        guard = RESOLUTION_ULPS * self.eps * self.weights[b] * abs(float(values[BLOCK_VALUES * b + 2]))
+        out = (abs(load) <= abs(capacity) + guard, (1 if load > 0 else -1))
+        return out + (abs(float(capacity)) <= guard,) if weightless else out
 
     def at_rest(self, ta, s, t, b) -> str:
         """A unit at rest (particle: q' = 0; rolling body: w = 0): the mode it takes now."""
@@ -159,6 +176,19 @@ class FrictionModes:
         for k in block.members:
             s[self.system.state_index(k) + self.system.n_coordinates] = self.zero
         return "stuck" if holds else ("sliding+" if direction > 0 else "sliding-")
+
+    def _start_moving(self, s, block, direction: int) -> None:
+        """A unit set going from rest: its rate (a slip: w) a few ulps along ``direction`` (START_ULPS)."""
+        system = self.system
+        if block.rolls:
+            q = abs(float(s[block.rate]))
+            scale = float(self.scene.g) * self.time_scale + q
+            s[block.slip] = self.num(direction * START_ULPS * self.eps * scale)
+            return
+        for k in block.members:
+            c = system.state_index(k)
+            scale = (1 + abs(float(s[c]))) / self.time_scale
+            s[c + system.n_coordinates] = self.num(direction * START_ULPS * self.eps * scale)
 
     def handler(self, event):
         b = event.block
@@ -181,10 +211,22 @@ class FrictionModes:
                 if d_sgn == (1 if old == "sliding+" else -1):
                     return True
                 new = self.at_rest(ta, s, t, b)
-            elif kind in ("release+", "slip+"):
-                new = "sliding+"
-            else:  # release-, slip-
-                new = "sliding-"
+            else:  # release+/-, slip+/-: the load reached the static capacity
+                holds, direction, weightless = self._holds(s, t, b, weightless=True)
+                if holds and weightless:  # no release where the reaction, and with it the load, vanishes
+                    return True
+                if block.side >= 0:
+                    normal = self._evaluate(s, t)[BLOCK_VALUES * b + 3]
+                    side = -1 if normal < 0 else 1
+                    if side != self.holder[1][block.side]:
+                        # The reaction has just changed sign (two-sided track) and the side parameter
+                        # lags it (events at one instant): mu_s side N_in < 0 was no release. Load and
+                        # capacity vanish together there; the unit stays unless it really exceeds.
+                        self._set(ta, block.side, self.one if side > 0 else -self.one)
+                        if holds:
+                            return True
+                new = "sliding+" if direction > 0 else "sliding-"
+                self._start_moving(s, block, direction)
             self.apply(ta, block, new)
             self._note(t, s, block, new)
             self.log.friction_transitions += 1

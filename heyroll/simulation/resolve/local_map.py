@@ -86,6 +86,8 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
             return evaluate(function, s, pars, t)[base:base + CONTACT_VALUES].tolist()
 
     seen: list = []  # what resolve saw: gap'', gradient, metrics and rates before the collision
+    # Friction modes and forcing change the accelerations at the collision: no bound from before it.
+    varying = bool(system.friction_blocks) or system.strobe_expression is not None
     # below_resolution holds only if v^2 <= 2 A h_res or v <= A (1 - k) t_res / 2 (see on_collision).
     h_bound = 2 * RESOLUTION_ULPS * eps
     t_bound = (1 - k) * RESOLUTION_ULPS * eps / 2
@@ -151,6 +153,7 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         t = ta.time
         if not resolve(s, t, pars):
             return False
+        _sync_friction(holder, s, t)
         if settle is not None and not settle(s, t, (a, b), number):
             return False
         # Persistent contact: bounces left below the run's resolution while pressed together.
@@ -170,7 +173,8 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         vi, vj = float(vi), float(vj)
         bound = 8 * (abs(acc0) + (vi0 * vi0 + vj0 * vj0 + vi * vi + vj * vj) * (si * si + sj * sj) / curvature_scale)
         scale = 1 + abs(float(s[a])) + abs(float(s[b]))
-        if opening * opening > bound * h_bound * scale and opening > bound * t_bound * (abs(float(t)) + time_scale):
+        if not varying and opening * opening > bound * h_bound * scale and \
+                opening > bound * t_bound * (abs(float(t)) + time_scale):
             return close_collision(log, number, False)
         _gap, gi, gj, _si, _sj, acc, jerk = values(s, pars, t)
         opening = min(float(gi * s[nu + a] + gj * s[nu + b]), bounce)
@@ -244,6 +248,7 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
                     rounds += 1
                     if not resolvers[number](s, t, holder[1]):
                         return False
+                    _sync_friction(holder, s, t)
                     pending += [a, b]
                     seen.update((a, b))
                     continue
@@ -263,3 +268,12 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
         return True
 
     return settle
+
+
+def _sync_friction(holder, s, t) -> None:
+    """Rough tracks: the units' friction modes follow the rates a collision has just set, before the
+    contact is judged (resolve.friction.FrictionModes.sync; found by fuzzing: a stuck particle hit
+    plastically was judged with its zero acceleration, the pair let open, its next collision unseen)."""
+    modes = holder[2] if len(holder) > 2 else None
+    if modes is not None:
+        modes.sync(s, t)
