@@ -550,3 +550,21 @@ def test_a_particle_meets_a_disk_at_its_contact_point_and_never_passes_it():
         Scene.make(ArcChainTrack.make([Segment("line", angle=mpmath.mpf(0), length=mpmath.mpf(2))], 0, 0),
                    [PARTICLE, DISK], ["0.2", "1"], [0, 0], law=make_law("newton", 1))
     assert info.value.field == "bodies[2].shape"
+
+
+def test_a_forced_run_with_limiter_impacts_draws_its_impact_map(tmp_path):
+    """A base-excited particle between limiters settles on a periodic impact orbit: two impacts a period,
+    at forcing phases pi apart, with one impact speed (the impact map's fixed points)."""
+    from heyroll.interfaces.friction_figures import _impacts, friction_figures
+
+    scene = Scene.make(CurveTrack.make("x**2/2", "-0.4", "0.4"), [PARTICLE], [0], [0], friction="0.05",
+                       static_friction="0.1", forcing=Forcing.make("base", amplitude="0.3", frequency=7),
+                       limiter_restitution="0.7", track_sides="one", run=RunSettings.make(60))
+    result = simulate(scene)
+    files = friction_figures(result, tmp_path)
+    assert files["impact_map"] == "impact_map.png" and (tmp_path / "impact_map.png").stat().st_size > 5000
+    t, speed, _labels = _impacts(result)
+    late = t > 40
+    phase = np.mod(7 * t[late], np.pi)  # the two limiters' impacts, half a period apart
+    assert np.ptp(speed[late]) < 1e-9  # one impact speed on the orbit
+    assert np.ptp(phase) < 1e-9 and late.sum() >= 20

@@ -20,6 +20,9 @@
   final energy, friction work, energy lost in impacts.
 * ``stroboscopic.png`` (forced runs with samples): the stroboscopic Poincare section,
   (q, q') of each body once a forcing period.
+* ``impact_map.png`` (forced runs with impacts): the impact map of vibro-impact dynamics,
+  the forcing's phase nu t + psi (mod 2 pi) at each impact against the impact speed (the
+  closing rate of a collision, |q'| at a limiter), coloured by time.
 
 Matplotlib's object API with the Agg canvas (:func:`heyroll.interfaces.figures._save`,
 written atomically): nothing global happens on import or on drawing. Empty data
@@ -77,7 +80,51 @@ def friction_figures(result: SimulationResult, out_dir) -> dict[str, str]:
     if result.scene.forcing is not None and _strobe(result).shape[0] > 0:
         stroboscopic_figure(result, out / "stroboscopic.png")
         files["stroboscopic"] = "stroboscopic.png"
+    if result.scene.forcing is not None and _impacts(result)[0].size:
+        impact_map_figure(result, out / "impact_map.png")
+        files["impact_map"] = "impact_map.png"
     return files
+
+
+def _impacts(result: SimulationResult):
+    """(t, impact speed, label) of every collision (closing rate q'_i - q'_j) and limiter impact (|q'|)."""
+    table = _collisions(result)
+    t, speed, label = [], [], []
+    if table.size:
+        t += [float(x) for x in table["t"]]
+        speed += [abs(float(a) - float(b)) for a, b in zip(table["dq_i_before"], table["dq_j_before"])]
+        label += [f"collision {int(i)}-{int(j)}" for i, j in zip(table["i"], table["j"])]
+    for row in result.passages:
+        if row[2] != 0:
+            t.append(float(row[0]))
+            speed.append(abs(float(row[6])))
+            label.append(f"body {row[1] + 1} at a limiter")
+    order = np.argsort(t, kind="stable")
+    return np.asarray(t)[order], np.asarray(speed)[order], [label[k] for k in order]
+
+
+def impact_map_figure(result: SimulationResult, path) -> None:
+    """The impact map: forcing phase (nu t + psi mod 2 pi) against impact speed, one marker per kind."""
+    f = result.scene.forcing
+    t, speed, labels = _impacts(result)
+    phase = np.mod(float(f.frequency) * t + float(f.phase), 2 * np.pi)
+    fig = Figure(figsize=(7.5, 4.8), layout="constrained")
+    ax = fig.add_subplot(1, 1, 1)
+    markers = dict(zip(sorted(set(labels)), "osD^v<>px*"))
+    mappable = None
+    for name, marker in markers.items():
+        sel = np.array([x == name for x in labels])
+        mappable = ax.scatter(phase[sel], speed[sel], c=t[sel], cmap="viridis", vmin=float(t.min()),
+                              vmax=float(t.max()) if t.max() > t.min() else float(t.min()) + 1, marker=marker,
+                              s=14 if t.size < 500 else 4, edgecolors="none", label=name)
+    if mappable is not None:
+        fig.colorbar(mappable, ax=ax, label="t (s)")
+    ax.set_xlim(0, 2 * np.pi)
+    ax.set_xlabel("forcing phase at impact, nu t + psi (mod 2 pi) [rad]")
+    ax.set_ylabel("impact speed (closing rate, or |q'| at a limiter)")
+    ax.legend(fontsize=7, loc="best")
+    ax.set_title(f"{result.scene.name}: impact map ({t.size} impacts; {f.describe()})", fontsize=8)
+    _save(fig, Path(path))
 
 
 # --------------------------------------------------------------------------- data

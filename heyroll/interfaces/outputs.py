@@ -189,7 +189,7 @@ def summary_dict(result: SimulationResult, *, scene_source: str, files: dict) ->
 #: The files a run writes (and their temporary names): what a new run in the same directory replaces.
 RUN_FILES = ("collisions.csv", "collisions.npy", "collisions.parquet", "passages.csv", "transitions.csv",
              "stroboscopic.csv", "summary.json", "phase_portrait.png", "energy.png", "friction_portrait.png",
-             "friction_energy.png", "stroboscopic.png")
+             "friction_energy.png", "stroboscopic.png", "impact_map.png")
 
 
 def writable_problem(out: Path) -> str | None:
