@@ -315,6 +315,23 @@ def _print_branches(result, all_events):
                   f"{b['E0'] - b['E1']:12.9f} {w:>12}  {', '.join(b['end'])}")
 
 
+def energy_account(check, result, label: str, what: str, n_bodies: int) -> list:
+    """Check one run's energy account: the whole run (fall = friction work + impacts' losses) and
+    branch by branch (fall = friction work); prints the totals; returns each body's events."""
+    check(f"{label} run succeeds", result.message, result.success)
+    d_e, w, imp, lim = global_balance(result)
+    print(f"  {what}_initial - {what}_final = {d_e:.15g} J; friction work {w:.15g} J + collision losses {imp:.15g} J "
+          f"({result.n_collisions} collisions) + limiter losses {lim:.15g} J ({len(result.limiter_impacts)} impacts); "
+          f"final modes {result.final_modes}")
+    scale = abs(result.energy_initial)
+    check(f"{label}: {what}_i - {what}_f = friction + impacts (relative)", abs(d_e - w - imp - lim) / scale,
+          abs(d_e - w - imp - lim) <= ENERGY_TOL * scale)
+    events = [body_events(result, k) for k in range(n_bodies)]
+    worst = max(branch_balance(ev, scale) for ev in events)
+    check(f"{label}: {what} drop = friction work per branch (relative)", worst, worst <= ENERGY_TOL)
+    return events
+
+
 def main(out_dir=None, quick=False) -> dict:
     """Run the study; returns {check name: (passed, value)}; figures into ``out_dir``."""
     out = Path(out_dir) if out_dir is not None else Path(__file__).resolve().parent / "figures"
@@ -331,17 +348,8 @@ def main(out_dir=None, quick=False) -> dict:
     print(f"(a) two particles in a rough circle: R = {p['R']} m, mu = {p['mu']}, mu_s = {p['mu_s']}, Newton k = {p['k']}, "
           f"phi0 = {p['phi']}, dphi0 = {p['dphi']}, t_end = {p['t_end']} s")
     res_a = simulate(circle_scene(p["phi"], p["dphi"], p["t_end"]), dense=True)
-    check("circle run succeeds", res_a.message, res_a.success)
-    ev_a = [body_events(res_a, k) for k in range(2)]
+    ev_a = energy_account(check, res_a, "circle", "E", 2)
     _print_branches(res_a, ev_a)
-    d_e, w, imp, lim = global_balance(res_a)
-    print(f"  E_initial - E_final = {d_e:.15g} J; friction work {w:.15g} J + impact losses {imp:.15g} J "
-          f"({res_a.n_collisions} collisions)")
-    scale = abs(res_a.energy_initial)
-    check("circle: E_i - E_f = friction + impacts (relative)", abs(d_e - w - imp - lim) / scale,
-          abs(d_e - w - imp - lim) <= ENERGY_TOL * scale)
-    worst = max(branch_balance(ev, scale) for ev in ev_a)
-    check("circle: energy drop = friction work per branch (relative)", worst, worst <= ENERGY_TOL)
     cf = closed_form_errors(res_a)
     check(f"circle: {cf['turning_points']} turning points vs closed form (rad)", cf["phi"],
           cf["turning_points"] > 0 and cf["phi"] <= CLOSED_FORM_TOL)
@@ -382,17 +390,8 @@ def main(out_dir=None, quick=False) -> dict:
           f"rad/s about x = {c['axis_x']}, mu = {c['mu']}, mu_s = {c['mu_s']}, k = {c['k']}, limiters k = {c['k_lim']}, "
           f"x0 = {c['x']}, dx0 = {c['dx']}")
     res_b = simulate(curve_scene(c["t_end"]), dense=True)
-    check("curve run succeeds", res_b.message, res_b.success)
-    ev_b = [body_events(res_b, k) for k in range(2)]
+    ev_b = energy_account(check, res_b, "curve", "H", 2)
     _print_branches(res_b, ev_b)
-    d_e, w, imp, lim = global_balance(res_b)
-    print(f"  H_initial - H_final = {d_e:.15g} J; friction work {w:.15g} J + collision losses {imp:.15g} J "
-          f"({res_b.n_collisions} collisions) + limiter losses {lim:.15g} J ({len(res_b.limiter_impacts)} impacts)")
-    scale = abs(res_b.energy_initial)
-    check("curve: H_i - H_f = friction + collisions + limiters (relative)", abs(d_e - w - imp - lim) / scale,
-          abs(d_e - w - imp - lim) <= ENERGY_TOL * scale)
-    worst = max(branch_balance(ev, scale) for ev in ev_b)
-    check("curve: Jacobi integral drop = friction work per branch (relative)", worst, worst <= ENERGY_TOL)
     check("curve: limiter impacts occur", len(res_b.limiter_impacts), len(res_b.limiter_impacts) > 0)
 
     def curve_energy(k, q, dq):
@@ -408,16 +407,7 @@ def main(out_dir=None, quick=False) -> dict:
         t3 = PARAMETERS["three"]
         print(f"\n(c) three particles in the rough circle: phi0 = {t3['phi']}, dphi0 = {t3['dphi']}")
         res_c = simulate(circle_scene(t3["phi"], t3["dphi"], t3["t_end"]), dense=True)
-        check("three particles: run succeeds", res_c.message, res_c.success)
-        d_e, w, imp, lim = global_balance(res_c)
-        print(f"  {res_c.n_collisions} collisions, {len(res_c.transitions)} changes of mode; E_i - E_f = {d_e:.15g} J, "
-              f"friction {w:.15g} J, impacts {imp:.15g} J; final modes {res_c.final_modes}")
-        scale = abs(res_c.energy_initial)
-        check("three particles: E_i - E_f = friction + impacts (relative)", abs(d_e - w - imp - lim) / scale,
-              abs(d_e - w - imp - lim) <= ENERGY_TOL * scale)
-        ev_c = [body_events(res_c, k) for k in range(3)]
-        worst = max(branch_balance(ev, scale) for ev in ev_c)
-        check("three particles: energy drop = friction work per branch (relative)", worst, worst <= ENERGY_TOL)
+        energy_account(check, res_c, "three particles", "E", 3)
         runs.append(("(c) three particles in the rough circle", res_c))
     energy_figure(runs, out / "section2_energy.png", n_samples)
     passed = sum(ok for ok, _ in checks.values())

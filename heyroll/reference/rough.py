@@ -329,6 +329,11 @@ def incline_stopping_distance(alpha, mu, v0, g, *, dps: int = 40):
     alpha < 0 that direction descends, and if sin a + mu cos a <= 0 the
     particle never stops: the result is mpmath.inf.
     """
+    return _uphill_stop(alpha, mu, v0, g, dps, lambda v, dec: v**2 / (2 * dec))
+
+
+def _uphill_stop(alpha, mu, v0, g, dps, of):
+    """``of(v0, deceleration)`` for a particle launched uphill at v0 (inf if it never stops)."""
     dps = _check_dps(dps)
     with mpmath.workdps(dps + GUARD_DPS):
         a = _incline_angle(alpha)
@@ -340,25 +345,14 @@ def incline_stopping_distance(alpha, mu, v0, g, *, dps: int = 40):
         dec = g * (mpmath.sin(a) + mu * mpmath.cos(a))
         if not dec > 0:
             return mpmath.inf if v0 > 0 else mpmath.mpf(0)
-        return _out(dps, v0**2 / (2 * dec))
+        return _out(dps, of(v0, dec))
 
 
 def incline_stopping_time(alpha, mu, v0, g, *, dps: int = 40):
     """Time to stop of a particle launched uphill at speed v0 > 0:
     t = v0 / (g (sin(alpha) + mu cos(alpha))) (constant deceleration, see
     :func:`incline_stopping_distance`); mpmath.inf if it never stops."""
-    dps = _check_dps(dps)
-    with mpmath.workdps(dps + GUARD_DPS):
-        a = _incline_angle(alpha)
-        mu, _ = _friction(mu, None)
-        v0 = _num(v0, "v0")
-        g = _positive(g, "g")
-        if v0 < 0:
-            raise ValueError("v0 must be >= 0 (a speed uphill)")
-        dec = g * (mpmath.sin(a) + mu * mpmath.cos(a))
-        if not dec > 0:
-            return mpmath.inf if v0 > 0 else mpmath.mpf(0)
-        return _out(dps, v0 / dec)
+    return _uphill_stop(alpha, mu, v0, g, dps, lambda v, dec: v / dec)
 
 
 # =====================================================================

@@ -80,8 +80,7 @@ class CurveTrack:
         return np.linspace(float(self.x_min), float(self.x_max), CURVE_CHECK_POINTS)
 
     def numeric(self, node: ex.Node, x):
-        value = ex.evaluate(node, np.asarray(x, dtype=float), NUMPY)
-        return np.broadcast_to(value, np.shape(x)).astype(float)
+        return numeric(node, x)
 
     def curvature(self, x):
         """Signed curvature f'' / (1 + f'^2)^(3/2), > 0 where the curve is concave up."""
@@ -178,6 +177,12 @@ class CurveTrack:
         d1, d2 = self.numeric(self.df, x), self.numeric(self.d2f, x)
         w2 = 1 + d1 * d1
         return w2 * (1 - r * d2 / w2**1.5) ** 2
+
+
+def numeric(node: ex.Node, x) -> np.ndarray:
+    """A track expression's values at x (float64 array of x's shape; a constant broadcast)."""
+    value = ex.evaluate(node, np.asarray(x, dtype=float), NUMPY)
+    return np.broadcast_to(value, np.shape(x)).astype(float)
 
 
 def _as_expression(value):

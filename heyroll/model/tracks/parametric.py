@@ -26,7 +26,7 @@ from .. import expression as ex
 from .._numbers import Real, is_finite, to_mpf
 from ..bodies import Body
 from .base import BodyTerms, Dynamics, lagrangian_terms
-from .curve import CURVE_CHECK_POINTS, NUMPY
+from .curve import CURVE_CHECK_POINTS, _as_expression, numeric
 
 
 @dataclass(frozen=True)
@@ -91,8 +91,7 @@ class ParametricTrack:
         return np.linspace(float(self.u_min), float(self.u_max), CURVE_CHECK_POINTS)
 
     def numeric(self, node: ex.Node, u):
-        value = ex.evaluate(node, np.asarray(u, dtype=float), NUMPY)
-        return np.broadcast_to(value, np.shape(u)).astype(float)
+        return numeric(node, u)
 
     def curvature(self, u):
         """Signed curvature (X' Y'' - Y' X'')/|P'|^3, > 0 where the track turns towards the body."""
@@ -151,6 +150,3 @@ class ParametricTrack:
         return (f"the curve x(u), y(u) = {self.text} on u in "
                 f"[{mpmath.nstr(self.u_min, 6)}, {mpmath.nstr(self.u_max, 6)}]")
 
-
-def _as_expression(value):
-    return value if isinstance(value, hy.expression) else hy.expression(float(value))
