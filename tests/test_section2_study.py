@@ -25,7 +25,7 @@ def test_section2_quick_all_checks_pass(tmp_path):
     assert not failed, failed
     names = " ".join(checks)
     for needed in ("circle: E_i - E_f = friction + impacts", "turning points vs closed form",
-                   "curve: H_i - H_f = friction + collisions + limiters", "single particle: transition times"):
+                   "curve: H_i - H_f = friction + impacts", "single particle: transition times"):
         assert needed in names
     for fig in ("section2_circle_portrait.png", "section2_curve_portrait.png", "section2_energy.png"):
         assert (tmp_path / fig).stat().st_size > 10_000
