@@ -295,3 +295,197 @@ def test_sweep_speed_study_runs_and_prints_its_report(tmp_path):
     assert [r.split("|")[1].strip() for r in rows][:2] == ["loop: load + simulate", "loop: simulate only"]
     assert all(float(r.split("|")[4]) > 0 for r in rows)  # points per second
     assert [r.split("|")[7].strip() for r in rows[2:]] == ["yes"] * 3  # the loop's results, to the last bit
+
+
+# ----------------------------------------------------------------------------- --keep lists and the estimates
+
+#: Two equal balls (k = 1) released at rest symmetrically about the bottom of a circle: they meet
+#: at -phi_c, +phi_c with opposite rates, swap them, climb back to -+0.5 and return: every impact is
+#: the same, a period-1 impact sequence of period 2 x the fall from 0.5 to phi_c.
+SYMMETRIC = """name = "symmetric"
+g = 9.81
+[track]
+type = "circle"
+radius = 1.0
+[[bodies]]
+shape = "solid_sphere"
+radius = 0.1
+mass = 1.0
+phi = -0.5
+dphi = 0.0
+[[bodies]]
+shape = "solid_sphere"
+radius = 0.1
+mass = 1.0
+phi = 0.5
+dphi = 0.0
+[collision]
+law = "hedrih"
+restitution = 1.0
+[run]
+t_end = 20.0
+"""
+
+
+def test_keep_is_a_comma_list_in_canonical_order_and_bad_items_are_one_line(tmp_path, capsys):
+    plan = make_plan(grid=[("vary", "g=9:10:2")], keep="rotation, period,impacts:4,first:2,lyapunov")
+    assert plan.keep.text == "impacts:4,first:2,period,lyapunov,rotation" == plan.spec()["keep"]
+    assert make_plan(grid=[("vary", "g=9:10:2")], keep=["summary", "period"]).keep.text == "period"
+    assert make_plan(grid=[("vary", "g=9:10:2")]).spec()["keep"] == "summary"
+    assert make_plan(grid=[("vary", "g=9:10:2")], keep="impacts:3").spec()["keep"] == "impacts:3"  # as before
+    for keep, says in [("impacts:2,impacts:3", "given twice"), ("period:3", "comma list"), ("first:0", "M in first:M"),
+                       ("strobe:3", "needs a forced scene"), ("lyapunov,,", "comma list"), ("chaos", "comma list")]:
+        out = tmp_path / "out"
+        assert main(["sweep", "--vary", "g=9:10:2", "--keep", keep, "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and says in err, (keep, err)
+        assert not out.exists()
+
+
+def test_period_of_a_symmetric_head_on_pair_is_one_impact_checked_by_hand(tmp_path):
+    import mpmath
+
+    ds = run_sweep(scene_text=SYMMETRIC, values={"bodies[1].phi": [-0.5, -0.4]},
+                   keep="impacts:3,first:2,period,rotation", workers=1, out=tmp_path)
+    assert ds["period"].dims == ds["status"].dims and ds["period"].dtype == np.int64
+    symmetric, lopsided = ds.isel({"bodies[1].phi": 0}), ds.isel({"bodies[1].phi": 1})
+    assert int(symmetric["period"]) == 1 and int(symmetric["collisions"]) >= 17
+    # By hand: phi'' = -a sin(phi); from rest at -0.5 to the contact at -phi_c, sin(phi_c) = r / (R - r).
+    scene = heyroll.parse_scene(SYMMETRIC)
+    a = mpmath.mpf(float(scene.track.angular_stiffness(scene.bodies[0], scene.g)))
+    phi_c = mpmath.asin(mpmath.mpf(1) / 9)
+    fall = mpmath.quad(lambda p: 1 / mpmath.sqrt(2 * a * (mpmath.cos(p) - mpmath.cos(0.5))), [-0.5, -phi_c])
+    assert float(symmetric["period_time"]) == pytest.approx(float(2 * fall), rel=1e-9)
+    assert np.allclose(symmetric["impact_q_i"].values, -float(phi_c), rtol=1e-9)
+    assert np.all(np.diff(symmetric["impact_t"].values) == pytest.approx(float(2 * fall), rel=1e-9))
+    # The first impacts: the first is the fall itself; equal to simulate's.
+    result = heyroll.simulate(scene, t_end=20.0)
+    assert np.array_equal(symmetric["first_impact_t"].values, result.collision_table()["t"][:2])
+    assert float(symmetric["first_impact_t"][0]) == pytest.approx(float(fall), rel=1e-9)
+    # Rotation: body 1 oscillates, its net turn over the run is its final phase's offset.
+    assert float(symmetric["rotation"]) == (result.final_state[0] - result.initial_state[0]) / (2 * np.pi * 20.0)
+    # Released off-centre, the pair's impacts wander (quasi-periodic): no period.
+    assert int(lopsided["period"]) == 0 and np.isnan(float(lopsided["period_time"]))
+    assert int(lopsided["collisions"]) >= 17 + 4  # enough impacts to test p = 1..4 at least
+
+
+def test_period_detection_on_synthetic_sequences():
+    from heyroll.sweep.points import IMPACT_COLUMNS, impact_period
+
+    def table(pairs, q, rate, t):
+        rows = np.zeros(len(t), dtype=[(c, np.int64 if c in ("n", "i", "j") else float) for c in IMPACT_COLUMNS])
+        rows["i"], rows["j"] = np.array(pairs).T
+        rows["q_i"] = rows["q_j"] = q
+        rows["dq_i_after"], rows["dq_j_after"] = rate, -np.asarray(rate)
+        rows["t"] = t
+        return rows
+
+    n = 60
+    three = np.arange(n) % 3
+    # Period 3 in the positions (one wraps around the circle between cycles), pairs alternating.
+    q = np.array([0.1, 2.0, 3.1])[three] + 2 * np.pi * (np.arange(n) // 3)
+    t = np.cumsum(np.array([0.5, 0.25, 1.0])[three])
+    rows = table([(1, 2), (2, 1), (1, 2)] * (n // 3), q, np.array([1.0, -2.0, 3.0])[three], t)
+    assert impact_period(rows, angle=True) == (3, pytest.approx(1.75))
+    assert impact_period(rows, angle=False)[0] == 0  # unwrapped, the positions never repeat
+    assert impact_period(rows[:3 + 15], angle=True) == (0, pytest.approx(np.nan, nan_ok=True))  # too few impacts
+    drift = rows.copy()
+    drift["dq_i_after"] *= 1 + 1e-5 * np.arange(n)  # a slow drift: above 1e-6 relative
+    assert impact_period(drift, angle=True)[0] == 0
+
+
+def test_lyapunov_estimate_per_point_with_its_error_and_nan_with_a_reason(tmp_path):
+    from heyroll.analysis.horizon import lyapunov_estimate
+    from heyroll.sweep.points import block_error
+
+    ds = run_sweep(values={"collision.restitution": [0.9, 1.0]}, keep="lyapunov", t_end=6.0, workers=1, out=tmp_path)
+    scene = heyroll.parse_scene(scene_with(default_scene_text(), **{"collision.restitution": "1.0"}))
+    estimate = lyapunov_estimate(scene, t_end=6.0)
+    point = ds.sel({"collision.restitution": 1.0})
+    assert float(point["lyapunov"]) == estimate.exponent
+    assert float(point["lyapunov_error"]) == block_error(estimate.times, estimate.history) > 0
+    assert str(point["lyapunov_message"].values) == estimate.message
+    assert ds["lyapunov"].attrs["units"] == "1/s"
+    # Blocks: the rates of equal halves 1 and 3 1/s -> mean 2, standard error 1.
+    assert block_error([1, 2, 3, 4], [1, 1, 5 / 3, 2], blocks=2) == pytest.approx(1.0)
+    assert np.isnan(block_error([1, 2, 3], [1, 1, 1]))  # too few segments
+    # A forced path scene: not estimated, NaN and the reason; no rotation number off a circle.
+    forced = run_sweep(ROOT / "examples" / "rough_parabola_forced.toml", values={"forcing.amplitude": [2.0]},
+                       keep="lyapunov,rotation", t_end=2.0, workers=1, out=tmp_path / "forced")
+    assert np.isnan(forced["lyapunov"]).all() and np.isnan(forced["rotation"]).all()
+    assert "circle scenes only" in str(forced["lyapunov_message"].values[0])
+
+
+def test_strobe_samples_of_a_forced_scene_and_the_poincare_figure(tmp_path, capsys):
+    from heyroll.sweep.figures import sweep_figures
+
+    scene = ROOT / "examples" / "rough_parabola_forced.toml"
+    ds = run_sweep(scene, values={"forcing.amplitude": [1.5, 2.0, 2.5]}, keep="strobe:4,period", t_end=8.0,
+                   workers=1, out=tmp_path)
+    assert ds["strobe_state"].dims == ("forcing.amplitude", "strobe", "state")
+    assert ds["state"].values.tolist() == ["x1", "dx1"]
+    alone = heyroll.parse_scene(scene.read_text().replace("amplitude = 2.0", "amplitude = 2.5"))
+    strobe = heyroll.simulate(alone, t_end=8.0).strobe_table  # t = 0, pi, 2 pi: one slot of 4 empty
+    point = ds.sel({"forcing.amplitude": 2.5})
+    assert len(strobe) == 3 and np.isnan(point["strobe_t"].values[3])
+    assert np.array_equal(point["strobe_t"].values[:3], strobe[:, 0])
+    assert np.array_equal(point["strobe_state"].values[:3], strobe[:, 1:])
+    assert main(["plot", str(tmp_path / "sweep.zarr"), "--out", str(tmp_path / "f")]) == 0
+    assert (tmp_path / "f" / "poincare.png").read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "f" / "scalars.png").is_file()  # period against the amplitude
+    assert sweep_figures(tmp_path / "sweep.zarr", tmp_path / "g", points=[0])[-1].name == "poincare.png"
+    with pytest.raises(SweepError, match="point numbers run from 0 to 2"):
+        sweep_figures(tmp_path / "sweep.zarr", tmp_path / "g", points=[3])
+
+
+def test_plot_maps_the_estimates_of_two_keys(tmp_path, capsys):
+    run_sweep(vary={"collision.restitution": (0.9, 1.0, 2), "bodies[1].dphi": (0, 0.5, 2)},
+              keep="period,lyapunov,rotation", t_end=3.0, workers=1, out=tmp_path)
+    capsys.readouterr()
+    assert main(["plot", str(tmp_path / "sweep.zarr"), "--out", str(tmp_path / "f")]) == 0
+    printed = capsys.readouterr().out
+    for name in ("energy_loss", "collisions", "period", "lyapunov", "rotation"):
+        assert f"map_{name}.png" in printed and (tmp_path / "f" / f"map_{name}.png").is_file()
+    assert main(["plot", str(tmp_path / "sweep.zarr"), "--out", str(tmp_path / "g"), "--scalar", "period_time"]) == 0
+    run_sweep(vary={"g": (9, 10, 2), "collision.restitution": (0.9, 1.0, 2)}, t_end=1.0, workers=1, out=tmp_path / "s")
+    assert main(["plot", str(tmp_path / "s" / "sweep.zarr"), "--scalar", "lyapunov"]) == 2  # not kept there
+    assert "must be one of energy_loss, collisions, t_final, relative_energy_change" in capsys.readouterr().err
+
+
+def test_precision_reaches_every_point_and_the_store_says_it(tmp_path):
+    scene = tmp_path / "scene.toml"
+    scene.write_text(default_scene_text() + '\n[sweep]\nvalues = ["collision.restitution=0.9,1"]\nprecision = "long"\n'
+                     'keep = "impacts:2,period"\n')
+    ds = run_sweep(scene, t_end=2.0, workers=1, out=tmp_path / "long")
+    assert ds.attrs["precision"] == "long" and make_plan(scene).spec()["precision"] == "long"
+    alone = heyroll.parse_scene(scene_with(default_scene_text(), **{"collision.restitution": "0.9"}))
+    result = heyroll.simulate(alone, t_end=2.0, precision="long")
+    point = ds.sel({"collision.restitution": 0.9})
+    assert ds["t_final"].dtype == np.float64 and ds["impact_t"].dtype == np.float64
+    assert float(point["energy_final"]) == result.energy_final
+    assert np.array_equal(point["final_state"].values, np.asarray(result.final_state, dtype=float))
+    assert np.array_equal(point["impact_t"].values, result.collision_table()["t"][-2:])
+    assert "precision" not in make_plan(grid=[("vary", "g=9:10:2")]).spec()  # double: the spec as before
+    with pytest.raises(SweepStoreError, match="precision differ"):
+        run_sweep(scene, t_end=2.0, workers=1, out=tmp_path / "long", precision="double")
+    with pytest.raises(SweepError, match="--precision: unknown precision 'single'"):
+        make_plan(grid=[("vary", "g=9:10:2")], precision="single")
+
+
+def test_resume_with_estimates_gives_the_identical_store(tmp_path):
+    plan = make_plan(scene_text=SYMMETRIC, grid=[("values", "bodies[1].phi=-0.5,-0.45,-0.4,2")],
+                     keep="impacts:2,first:2,period,lyapunov,rotation", t_end=4.0, chunk_points=2)
+    sweep_run.execute(plan, tmp_path / "whole", workers=1, command="sweep")
+
+    def stop(n):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep_run.execute(plan, tmp_path / "part", workers=1, command="sweep", after_chunk=stop)
+    outcome = sweep_run.execute(plan, tmp_path / "part", workers=1, command="sweep")
+    assert outcome.stored_before == 2 and outcome.statuses == {"completed": 3, "invalid_scene": 1}
+    whole = open_sweep(tmp_path / "whole" / "sweep.zarr")
+    assert open_sweep(tmp_path / "part" / "sweep.zarr").identical(whole)
+    invalid = whole.isel({"bodies[1].phi": 3})  # phi = 2 overlaps ball 2: recorded with its error
+    assert str(invalid["status"].values) == "invalid_scene" and int(invalid["period"]) == -1
+    assert np.isnan(float(invalid["lyapunov"])) and str(invalid["lyapunov_message"].values) == ""

@@ -279,13 +279,11 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         friction_modes = getattr(settle, "friction", None)
         if friction_modes is not None:  # each unit's friction mode from the run's modes and the state now
             friction_modes.start(ta, ta.state, ta.time)
-            rates_before = ta.state.tolist()
+            friction_modes.begin(ta.state.tolist())
         settled = settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
         if friction_modes is not None:  # the modes follow the rates collisions at the mode's start left
             fill_record_modes(log, friction.modes, stream.pair_bodies)
-            kept = ta.pars  # modes synced by the settler's collisions (FrictionModes.sync: holder only)
-            kept[:] = holder[1][: len(kept)]
-            friction_modes.reconcile(ta, ta.state, ta.time, rates_before)
+            friction_modes.reconcile(ta, ta.state, ta.time)
         if settled:
             full_state = system.expand(ta.state.tolist())
             modes[-1] = dataclasses.replace(modes[-1], state=tuple(full_state))

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..model.laws import GeneralizedNewtonLaw, ImpulseMap, impulse_map
 from ..model._numbers import workprec
+from .resolve.friction import slipping, slipping_law
 from .system import SceneSystem, overlap_tolerance, unit_acceleration, unit_jerk
 
 #: A post-collision separation rate within this many ulps of zero (relative to
@@ -211,6 +212,8 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
             if slipping:
                 body_modes_before[:] = was
                 before_array[0], before_time[0] = s.copy(), ta.time
+            modes.begin(before)
+            modes.impact_state = before
             # Records are handed on (log.on_full) only once the modes after the impact are known.
             size, log.chunk_size = log.chunk_size, 1 << 62
             try:
@@ -218,9 +221,7 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
             finally:
                 log.chunk_size = size
             fill_record_modes(log, body_modes, pair_bodies, first)  # any earlier ones: the modes they had
-            kept = ta.pars  # modes brought up to date inside the handler (FrictionModes.sync)
-            kept[:] = holder[1][: len(kept)]
-            modes.reconcile(ta, s, ta.time, before)
+            modes.reconcile(ta, s, ta.time)  # (modes synced inside the handler reach the integrator)
             for record in records[first:]:
                 i, j = pair_bodies[record[1]]
                 spins = (spin(i, before), spin(j, before)) if slipping else (math.nan, math.nan)
@@ -609,11 +610,16 @@ def fallback_map(scene, pair) -> ImpulseMap:
     return impulse_map(law, scene.bodies[pair.i], scene.bodies[pair.j], scene.sigma(pair.i), scene.sigma(pair.j))
 
 
-def unit_map(system: SceneSystem, a: int, b: int, restitution) -> ImpulseMap:
-    """Newton's law on psi' between two units with their total generalized masses."""
+def unit_map(system: SceneSystem, a: int, b: int, restitution, slipping: tuple = ()) -> ImpulseMap:
+    """Newton's law on psi' between two units with their total generalized masses.
+
+    ``slipping``: (body, kappa) of rolling bodies that slip (rough tracks): such a body takes part
+    with its translational mass m rho^2 = G / kappa (resolve.friction.slipping_law).
+    """
+    slip = dict(slipping)
     with workprec():
-        Ma = mpmath.fsum(mpmath.mpf(system.gen_mass[k]) for k in system.units[a].members)
-        Mb = mpmath.fsum(mpmath.mpf(system.gen_mass[k]) for k in system.units[b].members)
+        Ma = mpmath.fsum(mpmath.mpf(system.gen_mass[k]) / slip.get(k, 1) for k in system.units[a].members)
+        Mb = mpmath.fsum(mpmath.mpf(system.gen_mass[k]) / slip.get(k, 1) for k in system.units[b].members)
         k = mpmath.mpf(restitution)
         return ImpulseMap(q=mpmath.mpf(1), a_i=(1 + k) * Mb / (Ma + Mb), a_j=(1 + k) * Ma / (Ma + Mb), one_plus_k=1 + k)
 
@@ -718,6 +724,12 @@ def _double_double_map(q, a_i, a_j):
     return apply
 
 
+def _slipping_map(scene, system, i, j, holder) -> WorkingMap:
+    """The working map of a collision where a rolling body slips (resolve.friction.slipping_law)."""
+    law, bi, bj = slipping_law(scene, i, j, slipping(holder, i, scene), slipping(holder, j, scene))
+    return working_map(impulse_map(law, bi, bj, scene.sigma(i), scene.sigma(j)), system.precision)
+
+
 def _halves(x: float) -> tuple[float, float]:
     c = _SPLIT * x
     hi = c - (c - x)
@@ -738,6 +750,7 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     law_map = working_map(pair.law_map, system.precision)
     fallback = working_map(fallback_map(scene, pair), system.precision)
     apply = law_map.apply
+    rough = bool(system.friction_blocks)
     i, j = pair.i, pair.j
     vi_index = system.n_bodies + i
     vj_index = system.n_bodies + j
@@ -771,8 +784,12 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         """
         vi = before[vi_index]
         vj = before[vj_index]
-        vi_new, vj_new = apply(vi, vj)
         flag = 0
+        if rough and (slipping(holder, i, scene) or slipping(holder, j, scene)):
+            vi_new, vj_new = _slipping_map(scene, system, i, j, holder).apply(vi, vj)
+            flag = 3
+        else:
+            vi_new, vj_new = apply(vi, vj)
         # The gap opens at rate vj_new - vi_new; it closed at vi - vj.
         closing = vi - vj
         if vj_new - vi_new < -tiny * closing:
@@ -1056,8 +1073,17 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
         state = s.tolist()
         before = system.expand(state)
         va, vb = state[nu + a], state[nu + b]
-        va_new, vb_new = law.apply(va, vb)
         flag = 0 if both_free else 2
+        if system.friction_blocks and (slipping(holder, pair.i, scene) or slipping(holder, pair.j, scene)):
+            if both_free:
+                va_new, vb_new = _slipping_map(scene, system, pair.i, pair.j, holder).apply(va, vb)
+                flag = 3
+            else:  # a cluster and a slipping body: its translational mass in Newton's law between units
+                slips = tuple((k, scene.bodies[k].kappa) for k in (pair.i, pair.j) if slipping(holder, k, scene))
+                va_new, vb_new = working_map(unit_map(system, a, b, scene.law.restitution, slips),
+                                             system.precision).apply(va, vb)
+        else:
+            va_new, vb_new = law.apply(va, vb)
         if vb_new - va_new < -SEPARATION_ULPS * eps * (va - vb):
             if strict:
                 stop.reason = "inconsistent"

@@ -80,7 +80,8 @@ TRANSITION_COLUMNS = ("n", "t", "body", "from", "to", "q", "dq")
 
 #: law_flag values: which law resolved the collision.
 LAW_FLAGS = {0: "the scene's law", 1: "fallback: Newton's law on the gap rate (the scene's law left the bodies approaching)",
-             2: "Newton's law on the gap rate between units (a cluster in persistent contact, or a body resting on a limiter, took part)"}
+             2: "Newton's law on the gap rate between units (a cluster in persistent contact, or a body resting on a limiter, took part)",
+             3: "Newton's law with a slipping rolling body's translational inertia (rough tracks: the impulse through its centre, its spin unchanged)"}
 
 
 @dataclass(frozen=True)
@@ -207,6 +208,11 @@ def build_collision_table(
                                       before[rows, nb + j], number)
     table["law_impulse"], table["law_energy_change"] = impulse, change
     table["law_flag"] = 0 if flags is None else flags
+    if flags is not None and scene.rough:  # (flag 3: not the scene's law; its quantities do not apply)
+        slipped = np.asarray(flags) == 3
+        if slipped.any():
+            table["law_impulse"][slipped] = number(float("nan"))
+            table["law_energy_change"][slipped] = number(float("nan"))
     return table
 
 

@@ -5,8 +5,14 @@
   (its coordinate; on a circle phi wrapped to [-pi, pi)) and the closing rate
   dq_i - dq_j just before the impact;
 - one varied KEY, summary only: collisions and energy loss against the parameter;
-- two varied KEYs: a map of a per-point scalar (energy loss, collisions, ...)
-  with a colour bar (a grid as cells, a random sample as coloured dots).
+- two varied KEYs: a map of a per-point scalar (energy loss, collisions, and
+  the estimates period, lyapunov, rotation where kept) with a colour bar (a
+  grid as cells, a random sample as coloured dots);
+- one varied KEY with estimates kept: the estimates against the parameter
+  (the Lyapunov exponent with its standard error as bars);
+- stroboscopic samples kept (--keep strobe:M): the Poincare section of chosen
+  points (a few spread over the sweep by default), each body's (q, q') at the
+  samples, one colour per point.
 """
 
 from __future__ import annotations
@@ -25,31 +31,59 @@ SCALARS = {
     "collisions": (lambda ds: ds["collisions"].where(ds["collisions"] >= 0), "collisions"),
     "t_final": (lambda ds: ds["t_final"], "t_final (s)"),
     "relative_energy_change": (lambda ds: ds["energy_final"] / ds["energy_initial"] - 1, "E / E₀ − 1"),
+    # The estimates (--keep period, lyapunov, rotation): offered where the store has them.
+    "period": (lambda ds: ds["period"].where(ds["period"] >= 0), "period p of the impact sequence (0: none)"),
+    "period_time": (lambda ds: ds["period_time"], "time of one impact cycle T (s)"),
+    "lyapunov": (lambda ds: ds["lyapunov"], "largest Lyapunov exponent (1/s)"),
+    "rotation": (lambda ds: ds["rotation"], "rotation number of body 1 (turns/s)"),
 }
+#: The scalars drawn by default (the estimates only where kept), in this order.
+DEFAULT_SCALARS = ("energy_loss", "collisions", "period", "lyapunov", "rotation")
+#: Points whose Poincare section is drawn when none are chosen (spread over the sweep).
+POINCARE_POINTS = 6
 
 
-def sweep_figures(store, out_dir, scalar: str | None = None) -> list[Path]:
-    """Draw the figures of the sweep in ``store`` into ``out_dir``; their paths (none for 3 KEYs or more)."""
+def available_scalars(ds) -> list:
+    """The scalars ``ds`` can give (the estimates' variables must be in the store)."""
+    needs = {"period_time": "period"}
+    return [name for name in SCALARS
+            if name not in ("period", "period_time", "lyapunov", "rotation") or needs.get(name, name) in ds.data_vars]
+
+
+def sweep_figures(store, out_dir, scalar: str | None = None, points=None) -> list[Path]:
+    """Draw the figures of the sweep in ``store`` into ``out_dir``; their paths (none for 3 KEYs or more,
+    but the Poincare section).
+
+    ``points``: flat point numbers (C order, as in the store) whose Poincare section is drawn when
+    stroboscopic samples are kept (default: up to POINCARE_POINTS spread over the sweep).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
-    if scalar is not None and scalar not in SCALARS:
-        raise SweepError("--scalar", f"must be one of {', '.join(SCALARS)}, got {scalar!r}")
     ds = open_sweep(store)
+    offered = available_scalars(ds)
+    if scalar is not None and scalar not in offered:
+        raise SweepError("--scalar", f"must be one of {', '.join(offered)}, got {scalar!r}")
+    defaults = [name for name in DEFAULT_SCALARS if name in offered]
     spec = json.loads(ds.attrs[SPEC_ATTR])
     keys = [g["key"] for g in spec["grid"]] or [k["key"] for k in spec["random"]["keys"]]
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     title = f"{spec['scene'].get('name', spec['default_name'])}: {ds['status'].size} points"
+    paths = []
+    estimates = [name for name in defaults if name in ("period", "lyapunov", "rotation")]
     if len(keys) == 1:
         if "impact" in ds.dims:
-            return [_bifurcation(ds, keys[0], out_dir / "bifurcation.png", title)]
-        return [_scalars_1d(ds, keys[0], out_dir / "scalars.png", title, [scalar] if scalar else
-                            ["collisions", "energy_loss"])]
-    if len(keys) == 2:
-        names = [scalar] if scalar else ["energy_loss", "collisions"]
-        return [_map(ds, keys, name, out_dir / f"map_{name}.png", title) for name in names]
-    return []
+            paths.append(_bifurcation(ds, keys[0], out_dir / "bifurcation.png", title))
+        if "impact" not in ds.dims or estimates or scalar:
+            names = [scalar] if scalar else (["collisions", "energy_loss"] if "impact" not in ds.dims else []) + estimates
+            paths.append(_scalars_1d(ds, keys[0], out_dir / "scalars.png", title, names))
+    elif len(keys) == 2:
+        names = [scalar] if scalar else defaults
+        paths += [_map(ds, keys, name, out_dir / f"map_{name}.png", title) for name in names]
+    if "strobe" in ds.dims:
+        paths.append(poincare(ds, keys, out_dir / "poincare.png", title, points))
+    return paths
 
 
 def _label(ds, key: str) -> str:
@@ -105,7 +139,12 @@ def _scalars_1d(ds, key: str, path: Path, title: str, names: list) -> Path:
     order = np.argsort(ds[key].values)
     for ax, name in zip(axes[:, 0], names):
         values, label = SCALARS[name]
-        ax.plot(ds[key].values[order], np.asarray(values(ds).values, dtype=float)[order], ".-", ms=3, lw=0.6)
+        y = np.asarray(values(ds).values, dtype=float)[order]
+        ax.plot(ds[key].values[order], y, ".-", ms=3, lw=0.6)
+        if name == "lyapunov":
+            error = np.asarray(ds["lyapunov_error"].values, dtype=float)[order]
+            ax.errorbar(ds[key].values[order], y, yerr=error, fmt="none", ecolor="0.5", lw=0.6, capsize=2)
+            ax.axhline(0, color="0.6", lw=0.5)
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel(_label(ds, key))
@@ -132,4 +171,49 @@ def _map(ds, keys: list, name: str, path: Path, title: str) -> Path:
     missing = int(np.isnan(np.asarray(z.values, dtype=float)).sum())
     ax.set_title(f"{title}" + (f"; {missing} invalid or not run" + ("" if "point" in ds.dims else " (blank)")
                                if missing else ""))
+    return _save(fig, path)
+
+
+def poincare(ds, keys: list, path: Path, title: str, points=None) -> Path:
+    """The stroboscopic Poincare section of chosen points: each body's (q, q') at the kept samples,
+    one colour per point (a circle's phi wrapped to [-pi, pi))."""
+    import matplotlib.pyplot as plt
+
+    dims = ds["status"].dims
+    shape = ds["status"].shape
+    total = int(np.prod(shape))
+    t = np.asarray(ds["strobe_t"].values, dtype=float).reshape(total, -1)
+    state = np.asarray(ds["strobe_state"].values, dtype=float).reshape(total, t.shape[1], -1)
+    with_samples = [p for p in range(total) if np.isfinite(t[p]).any()]
+    if points is None:
+        chosen = [with_samples[int(round(k))] for k in
+                  np.linspace(0, len(with_samples) - 1, min(POINCARE_POINTS, len(with_samples)))] if with_samples else []
+        chosen = list(dict.fromkeys(chosen))
+    else:
+        chosen = [int(p) for p in points]
+        bad = [p for p in chosen if not 0 <= p < total]
+        if bad:
+            raise SweepError("points", f"point numbers run from 0 to {total - 1}, got {bad}")
+    n = state.shape[2] // 2
+    coordinate = ds.attrs.get("coordinate", "q")
+    unit = COORDINATE_UNITS.get(coordinate, "")
+    symbol = {"phi": "φ"}.get(coordinate, coordinate)
+    fig, axes = plt.subplots(1, n, figsize=(4.2 * n + 1.5, 4.2), constrained_layout=True, squeeze=False)
+    for p in chosen:
+        index = np.unravel_index(p, shape)
+        label = ", ".join(f"{k} = {float(ds[k].values[index[dims.index(ds[k].dims[0])]]):.4g}" for k in keys)
+        filled = np.isfinite(t[p])
+        for b, ax in enumerate(axes[0]):
+            q = state[p, filled, b]
+            if coordinate == "phi":
+                q = (q + np.pi) % (2 * np.pi) - np.pi
+            ax.scatter(q, state[p, filled, n + b], s=8, label=label if b == 0 else None)
+    for b, ax in enumerate(axes[0]):
+        ax.set_xlabel(f"{symbol}{b + 1} ({unit})")
+        ax.set_ylabel(f"{symbol}'{b + 1} ({unit}/s)")
+        ax.grid(alpha=0.3)
+    if chosen:
+        axes[0, 0].legend(fontsize=7, loc="best")
+    fig.suptitle(f"{title}\nstroboscopic section (last {ds.sizes['strobe']} samples, once a forcing period) of "
+                 f"{len(chosen)} points", fontsize=10)
     return _save(fig, path)

@@ -1,6 +1,6 @@
 """KEY paths: which numeric scene field a sweep varies, named as in the scene file.
 
-``collision.restitution``, ``bodies[2].mass``, ``frame.omega``, ``g``,
+``collision.restitution``, ``bodies[2].mass``, ``frame.omega``, ``forcing.amplitude``, ``g``,
 ``track.segments[3].radius``: a table (or an array of tables with a 1-based
 index, bodies numbered 1..N as everywhere) and a field. A KEY is checked
 against the scene file's own key sets (heyroll.interfaces.scene_file), so it
@@ -19,7 +19,7 @@ from .errors import SweepKeyError
 
 #: Scene-file fields that hold text or tables, never a number.
 NOT_NUMERIC = {"name", "type", "sides", "y", "kind", "side", "shape", "law", "on_inconsistent", "segments", "sweep",
-               "track", "bodies", "collision", "run", "frame"}
+               "track", "bodies", "collision", "run", "frame", "forcing"}
 #: Numeric fields that take whole numbers only.
 WHOLE_NUMBERS = {"segment", "max_collisions"}
 #: Two ways of giving one quantity: a point that sets one drops the other from its copy of the
@@ -108,6 +108,7 @@ def _check(key: Key, data: dict) -> None:
         "frame": sf.FRAME_KEYS,
         "collision": sf.COLLISION_KEYS,
         "run": sf.RUN_KEYS,
+        "forcing": sf.FORCING_KEYS,
     }
     if head not in tables:
         unknown(f"no table {head!r} with numeric fields; tables: {', '.join(tables)}, bodies[N], and g")
@@ -139,7 +140,7 @@ _UNITS = {
     "limiter_restitution": "", "kappa": "", "beta": "rad", "axis_x": "m", "start_x": "m", "start_y": "m",
     "x_min": "m", "x_max": "m", "x": "m", "dx": "m/s", "s": "m", "ds": "m/s", "phi": "rad", "dphi": "rad/s",
     "angle": "rad", "dangle": "rad/s", "length": "m", "start": "rad", "end": "rad", "t_end": "s",
-    "max_collisions": "", "segment": "",
+    "max_collisions": "", "segment": "", "frequency": "rad/s", "phase": "rad", "direction": "rad",
     "omega": "rad/s",  # the frame's rotation or a body's rolling angular velocity
 }
 #: A body's density is per volume, area or length, by its shape (README, "Bodies").

@@ -21,7 +21,7 @@ from decimal import Decimal, InvalidOperation
 
 import numpy as np
 
-from ..errors import SceneFileError
+from ..errors import SceneError, SceneFileError
 from .errors import SweepError
 from .keys import Key, parse_key, units
 
@@ -33,7 +33,11 @@ MAX_CHUNK_POINTS = 256
 MIN_CHUNKS = 16
 
 #: Keys of a scene file's [sweep] table (the CLI's flags without dashes).
-SWEEP_TABLE_KEYS = {"vary", "values", "random", "samples", "seed", "keep"}
+SWEEP_TABLE_KEYS = {"vary", "values", "random", "samples", "seed", "keep", "precision"}
+
+#: The most impacts ``first:M`` keeps: a run handed to a sink keeps its first chunk of records in
+#: memory (RunOptions.chunk_size), and the first M impacts are read from there.
+MAX_FIRST = 65536
 
 #: The coordinate each track type's bodies are placed by (README: phi on a circle).
 COORDINATES = {"circle": "phi", "curve": "x", "arcs": "s", "three_arcs": "s"}
@@ -69,10 +73,11 @@ class SweepPlan:
     default_name: str
     axes: tuple  # Axis, one per grid dimension (empty for a random sample)
     sample: Sample | None
-    keep: int  # the last ``keep`` impacts of each point are stored (0: the summary only)
+    keep: "Keep"  # what is stored per point besides the summary (--keep)
     t_end: float | None  # None: the scene's [run] t_end
     max_collisions: object  # ...: the scene's; None: no limit
     chunk_points: int
+    precision: str = "double"  # every point's working precision (Precision.name: double, long, quad, mp:BITS)
 
     @property
     def dims(self) -> tuple:
@@ -145,10 +150,12 @@ class SweepPlan:
             "random": None if self.sample is None else {
                 "keys": [{"key": k.text, "low": str(lo), "high": str(hi)} for k, lo, hi in self.sample.keys],
                 "samples": self.sample.samples, "seed": self.sample.seed},
-            "keep": "summary" if self.keep == 0 else f"impacts:{self.keep}",
+            "keep": self.keep.text,
             "t_end": None if self.t_end is None else repr(self.t_end),
             "max_collisions": "scene" if self.max_collisions is ... else self.max_collisions,
             "chunks": list(self.chunks),
+            # Only where it is not double: a store written before --precision existed is a double sweep.
+            **({"precision": self.precision} if self.precision != "double" else {}),
         }
 
 
@@ -176,12 +183,12 @@ def read_scene(scene=None, *, scene_text: str | None = None) -> tuple:
 
 
 def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, seed=None, keep=None,
-              t_end=None, max_collisions=..., chunk_points=None) -> SweepPlan:
+              t_end=None, max_collisions=..., chunk_points=None, precision=None) -> SweepPlan:
     """Check a sweep's specification and build its plan (raises SweepError / SceneError, one line each).
 
     ``grid``: ("vary" | "values", "KEY=SPEC") pairs in dimension order; ``random``:
     "KEY=LO:HI" strings. Without either, the scene file's [sweep] table says
-    (and its samples, seed and keep are defaults for the arguments).
+    (and its samples, seed, keep and precision are defaults for the arguments).
     """
     data, text, source, name = read_scene(scene, scene_text=scene_text)
     table = data.pop("sweep", None)
@@ -197,6 +204,7 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
         samples = table.get("samples") if samples is None else samples
         seed = table.get("seed") if seed is None else seed
         keep = table.get("keep") if keep is None else keep
+        precision = table.get("precision") if precision is None else precision
     if not isinstance(data.get("bodies"), list) or not data["bodies"] or not isinstance(data.get("track"), dict):
         raise SweepError("scene", "a sweep needs a scene with a [track] table and [[bodies]]")
     if not grid and not random:
@@ -251,17 +259,86 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
         chunk_points = min(MAX_CHUNK_POINTS, max(1, -(-n_points // MIN_CHUNKS)))
     else:
         chunk_points = _whole(chunk_points, "chunk_points", minimum=1, what="points per chunk")
-    return SweepPlan(data, text, source, name, tuple(axes), sample, parse_keep(keep), t_end, max_collisions,
-                     chunk_points)
+    keep = parse_keep(keep)
+    if keep.strobe and not isinstance(data.get("forcing"), dict):
+        raise SweepError("--keep", "strobe:M needs a forced scene (a [forcing] table): only forced runs have a "
+                                   "stroboscopic section")
+    return SweepPlan(data, text, source, name, tuple(axes), sample, keep, t_end, max_collisions,
+                     chunk_points, parse_precision(precision))
 
 
-def parse_keep(text) -> int:
-    """--keep: 'summary' (0) or 'impacts:M' (the last M impacts of each point)."""
-    if text is None or text == "summary":
-        return 0
-    if isinstance(text, str) and text.startswith("impacts:"):
-        return _whole(text[len("impacts:"):], "--keep", minimum=1, what="M in impacts:M")
-    raise SweepError("--keep", f"must be summary or impacts:M, got {text!r}")
+@dataclass(frozen=True)
+class Keep:
+    """What a sweep stores per point besides the summary (``--keep``, a comma list).
+
+    ``impacts``/``first``: the last/first M impacts (0: none); ``strobe``: the
+    last M stroboscopic samples of a forced run; ``period``, ``lyapunov``,
+    ``rotation``: the per-point estimates (README, "Sweeps").
+    """
+
+    impacts: int = 0
+    first: int = 0
+    strobe: int = 0
+    period: bool = False
+    lyapunov: bool = False
+    rotation: bool = False
+
+    @property
+    def text(self) -> str:
+        """The canonical text (the store's spec): the items in a fixed order, 'summary' for none."""
+        items = [f"{name}:{getattr(self, name)}" for name in ("impacts", "first", "strobe") if getattr(self, name)]
+        items += [name for name in KEEP_ESTIMATES if getattr(self, name)]
+        return ",".join(items) or "summary"
+
+    def __bool__(self) -> bool:
+        return self.text != "summary"
+
+
+#: --keep items with a count (NAME:M) and the estimates (a bare NAME), in their canonical order.
+KEEP_COUNTS = ("impacts", "first", "strobe")
+KEEP_ESTIMATES = ("period", "lyapunov", "rotation")
+
+
+def parse_keep(text) -> Keep:
+    """--keep: a comma list (or a list) of summary, impacts:M, first:M, strobe:M, period, lyapunov, rotation."""
+    if isinstance(text, Keep):
+        return text
+    if text is None:
+        return Keep()
+    if isinstance(text, int) and not isinstance(text, bool):  # the last M impacts (what keep was once)
+        return Keep(impacts=_whole(text, "--keep", minimum=0, what="M in impacts:M"))
+    items = text.split(",") if isinstance(text, str) else text
+    allowed = "summary, impacts:M, first:M, strobe:M, period, lyapunov, rotation"
+    if not isinstance(items, (list, tuple)) or not all(isinstance(i, str) for i in items):
+        raise SweepError("--keep", f"must be a comma list of {allowed}, got {text!r}")
+    fields, seen = {}, set()
+    for item in (i.strip() for i in items):
+        name, _, count = item.partition(":")
+        if name in seen:
+            raise SweepError("--keep", f"{name} is given twice in {text!r}")
+        seen.add(name)
+        if name in KEEP_COUNTS and count:
+            top = MAX_FIRST if name == "first" else None
+            fields[name] = _whole(count, "--keep", minimum=1, what=f"M in {name}:M")
+            if top is not None and fields[name] > top:
+                raise SweepError("--keep", f"M in first:M must be <= {top}, got {fields[name]}")
+        elif name in KEEP_ESTIMATES and not count:
+            fields[name] = True
+        elif item != "summary":
+            raise SweepError("--keep", f"must be a comma list of {allowed}, got {item!r}")
+    return Keep(**fields)
+
+
+def parse_precision(text) -> str:
+    """--precision: double (default), long, quad or mp:BITS, checked as simulate checks it; its canonical name."""
+    if text is None:
+        return "double"
+    from ..simulation.precision import Precision
+
+    try:
+        return Precision.parse(str(text), "--precision").name
+    except SceneError as exc:
+        raise SweepError("--precision", exc.rule) from None
 
 
 def _strings(table: dict, name: str) -> list:

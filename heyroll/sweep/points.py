@@ -10,6 +10,7 @@ compiles and the rest reuse it.
 from __future__ import annotations
 
 import copy
+import math
 import threading
 from dataclasses import dataclass
 
@@ -20,6 +21,7 @@ from ..interfaces.scene_file import scene_from_dict
 from ..simulation.driver import RunOptions, simulate
 from ..simulation.result import Status, build_collision_table
 from .keys import apply
+from .plan import Keep, parse_keep
 
 #: Status of a point whose scene the loader refused (its SceneError is the message).
 INVALID_SCENE = "invalid_scene"
@@ -29,6 +31,17 @@ ERROR = "error"
 #: Columns of the impacts kept per point (--keep impacts:M), from the collision table.
 IMPACT_COLUMNS = ("n", "t", "i", "j", "q_i", "q_j", "dq_i_before", "dq_j_before", "dq_i_after", "dq_j_after")
 WHOLE_IMPACT_COLUMNS = ("n", "i", "j")
+
+#: Period detection (--keep period): the smallest p in 1..PERIOD_MAX such that each of the last
+#: max(PERIOD_MATCHES, 2p) impacts equals the impact p before it (same pair; positions, wrapped on a
+#: circle, and outgoing rates within PERIOD_RTOL relative; the times p impacts apart equal to it too).
+PERIOD_MAX = 32
+PERIOD_MATCHES = 16
+PERIOD_RTOL = 1e-6
+#: The impacts a point keeps for it: enough for p = PERIOD_MAX.
+PERIOD_TAIL = 3 * PERIOD_MAX
+#: Renormalisation blocks of the Lyapunov exponent's standard error (at most; two segments a block at least).
+LYAPUNOV_BLOCKS = 8
 
 #: A worker started with several threads (``dask worker --nthreads 4``) would run chunks side
 #: by side in one process, and the compiled integrators heyroll caches per shape are single
@@ -46,8 +59,12 @@ class Chunk:
     values: tuple  # one tuple of values per point
     t_end: float | None
     max_collisions: object
-    keep: int
+    keep: Keep
     n_bodies: int
+    precision: str = "double"
+
+    def __post_init__(self):
+        object.__setattr__(self, "keep", parse_keep(self.keep))  # an int: the last M impacts, as keep once was
 
 
 class LastImpacts:
@@ -83,8 +100,9 @@ class LastImpacts:
                                      first_number=self.rows - len(times) + 1)
 
 
-def empty_columns(count: int, n_bodies: int, keep: int) -> dict:
+def empty_columns(count: int, n_bodies: int, keep) -> dict:
     """Columns of ``count`` points not run: '' status, -1 counts, NaN numbers, 0 body numbers."""
+    keep = parse_keep(keep)
     columns = {
         "status": np.full(count, "", dtype=object),
         "message": np.full(count, "", dtype=object),
@@ -94,10 +112,23 @@ def empty_columns(count: int, n_bodies: int, keep: int) -> dict:
         "energy_final": np.full(count, np.nan),
         "final_state": np.full((count, 2 * n_bodies), np.nan),
     }
-    if keep:
-        for c in IMPACT_COLUMNS:
-            columns[f"impact_{c}"] = (np.zeros((count, keep), dtype=np.int64) if c in WHOLE_IMPACT_COLUMNS
-                                      else np.full((count, keep), np.nan))
+    for prefix, m in (("impact_", keep.impacts), ("first_impact_", keep.first)):
+        if m:
+            for c in IMPACT_COLUMNS:
+                columns[f"{prefix}{c}"] = (np.zeros((count, m), dtype=np.int64) if c in WHOLE_IMPACT_COLUMNS
+                                           else np.full((count, m), np.nan))
+    if keep.strobe:
+        columns["strobe_t"] = np.full((count, keep.strobe), np.nan)
+        columns["strobe_state"] = np.full((count, keep.strobe, 2 * n_bodies), np.nan)
+    if keep.period:
+        columns["period"] = np.full(count, -1, dtype=np.int64)
+        columns["period_time"] = np.full(count, np.nan)
+    if keep.lyapunov:
+        columns["lyapunov"] = np.full(count, np.nan)
+        columns["lyapunov_error"] = np.full(count, np.nan)
+        columns["lyapunov_message"] = np.full(count, "", dtype=object)
+    if keep.rotation:
+        columns["rotation"] = np.full(count, np.nan)
     return columns
 
 
@@ -109,7 +140,7 @@ def run_chunk(chunk: Chunk) -> dict:
     """
     with _ONE_AT_A_TIME:
         columns = empty_columns(len(chunk.values), chunk.n_bodies, chunk.keep)
-        options = RunOptions(t_end=chunk.t_end, max_collisions=chunk.max_collisions)
+        options = RunOptions(t_end=chunk.t_end, max_collisions=chunk.max_collisions, precision=chunk.precision)
         for row, values in enumerate(chunk.values):
             _run_point(chunk, values, options, columns, row)
         return columns
@@ -122,7 +153,8 @@ def _run_point(chunk: Chunk, values: tuple, options: RunOptions, columns: dict, 
     except SceneError as exc:
         columns["status"][row], columns["message"][row] = INVALID_SCENE, str(exc)
         return
-    sink = LastImpacts(chunk.keep)
+    keep = chunk.keep
+    sink = LastImpacts(max(keep.impacts, PERIOD_TAIL if keep.period else 0))
     try:
         result = simulate(scene, options, sink=sink)
     except (ArithmeticError, RuntimeError, ValueError) as exc:  # heyoka's or the driver's refusal of this point
@@ -136,10 +168,122 @@ def _run_point(chunk: Chunk, values: tuple, options: RunOptions, columns: dict, 
     columns["energy_initial"][row] = result.energy_initial
     columns["energy_final"][row] = result.energy_final
     columns["final_state"][row] = np.asarray(result.final_state, dtype=float)
-    if chunk.keep:
-        table = sink.table()
+    if keep.impacts or keep.period:
+        tail = sink.table()
+        if keep.impacts:
+            table = tail[-keep.impacts:]
+            for c in IMPACT_COLUMNS:
+                columns[f"impact_{c}"][row, :table.size] = table[c]
+        if keep.period:
+            columns["period"][row], columns["period_time"][row] = impact_period(tail, angle=scene.track.kind == "circle")
+    if keep.first:
+        table = result.collision_table()[:keep.first]  # a run handed to a sink keeps its first chunk here
         for c in IMPACT_COLUMNS:
-            columns[f"impact_{c}"][row, :table.size] = table[c]
+            columns[f"first_impact_{c}"][row, :table.size] = table[c]
+    if keep.strobe:
+        strobe = result.strobe_table[-keep.strobe:]
+        columns["strobe_t"][row, :len(strobe)] = strobe[:, 0]
+        columns["strobe_state"][row, :len(strobe)] = strobe[:, 1:]
+    if keep.rotation:
+        columns["rotation"][row] = rotation_number(result)
+    if keep.lyapunov:
+        (columns["lyapunov"][row], columns["lyapunov_error"][row],
+         columns["lyapunov_message"][row]) = lyapunov(scene, result, chunk.precision)
+
+
+def impact_period(table: np.ndarray, *, angle: bool, p_max: int = PERIOD_MAX, matches: int = PERIOD_MATCHES,
+                  rtol: float = PERIOD_RTOL) -> tuple:
+    """(p, T): the period of the impact sequence in ``table`` (collision-table rows, oldest first) and its time.
+
+    p is the smallest of 1..p_max such that each of the last m = max(matches, 2p)
+    impacts equals the impact p before it: the same pair (i, j), the positions
+    q_i, q_j (wrapped to (-pi, pi] differences on a circle, ``angle``) and the
+    outgoing rates dq_i, dq_j after the impact within ``rtol`` relative (to the
+    largest magnitude of that column over the compared impacts; pi for an
+    angle), and the time between the two within ``rtol`` of its mean. T is the
+    time of the last p impacts, t[-1] - t[-1 - p]. (0, nan) where no p fits:
+    too few impacts, a transient or a chaotic sequence.
+    """
+    n = table.size
+    for p in range(1, p_max + 1):
+        m = max(matches, 2 * p)
+        if n < m + p:
+            break
+        new, old = table[n - m:], table[n - m - p:n - p]
+        if not (np.array_equal(new["i"], old["i"]) and np.array_equal(new["j"], old["j"])):
+            continue
+        ok = True
+        for c in ("q_i", "q_j", "dq_i_after", "dq_j_after"):
+            a, b = np.asarray(new[c], dtype=float), np.asarray(old[c], dtype=float)
+            d = a - b
+            if angle and c.startswith("q_"):
+                d, scale = (d + np.pi) % (2 * np.pi) - np.pi, np.pi
+            else:
+                scale = max(float(np.max(np.abs(a))), float(np.max(np.abs(b))))
+            if not np.all(np.abs(d) <= rtol * scale):
+                ok = False
+                break
+        if not ok:
+            continue
+        gaps = np.asarray(new["t"], dtype=float) - np.asarray(old["t"], dtype=float)
+        if not np.all(np.abs(gaps - gaps.mean()) <= rtol * abs(gaps.mean())) or not gaps.mean() > 0:
+            continue
+        return p, float(table["t"][-1] - table["t"][-1 - p])
+    return 0, math.nan
+
+
+def rotation_number(result) -> float:
+    """Circle scenes: the net turns of body 1 per second, (phi_final - phi_initial) / (2 pi t_final); nan elsewhere."""
+    t = float(result.t_final)
+    if result.scene.track.kind != "circle" or not t > 0:
+        return math.nan
+    turned = float(result.final_state[0]) - float(result.initial_state[0])
+    return turned / (2 * math.pi * t)
+
+
+def lyapunov(scene, result, precision: str) -> tuple:
+    """(exponent 1/s, its standard error 1/s, message) by heyroll.analysis.horizon.lyapunov_estimate over the
+    point's run time; (nan, nan, the reason) where it does not apply or fails.
+
+    The error is the standard error of the exponent over up to LYAPUNOV_BLOCKS blocks of consecutive
+    renormalisation segments (each block's accumulated log-stretch over its time); nan with fewer
+    than 4 segments.
+    """
+    from ..analysis.horizon import lyapunov_estimate
+
+    t = float(result.t_final)
+    why = None
+    if scene.track.kind != "circle":
+        why = f"lyapunov_estimate handles circle scenes only (states phi, dphi), not a {scene.track.kind} track"
+    elif scene.forcing is not None:
+        why = "lyapunov_estimate rebuilds scenes without their forcing: not estimated for a forced scene"
+    elif scene.frame.rotating:
+        why = "lyapunov_estimate rebuilds scenes without their turning frame: not estimated in a turning plane"
+    elif scene.rough:
+        why = "lyapunov_estimate rebuilds scenes without their slip state: not estimated on a rough track"
+    elif not t > 0:
+        why = "the run has no time to estimate over (t_final = 0)"
+    if why is not None:
+        return math.nan, math.nan, why
+    try:
+        est = lyapunov_estimate(scene, t_end=t, precision=precision)
+    except (ArithmeticError, NotImplementedError, RuntimeError, ValueError) as exc:
+        return math.nan, math.nan, f"{exc.__class__.__name__}: {exc}"
+    return float(est.exponent), block_error(est.times, est.history), est.message
+
+
+def block_error(times, history, blocks: int = LYAPUNOV_BLOCKS) -> float:
+    """Standard error of a Benettin estimate from its running history: the segments' log-stretches
+    (differences of history * time) split into blocks, each block's rate = its stretch / its time."""
+    times, history = np.asarray(times, dtype=float), np.asarray(history, dtype=float)
+    n = times.size
+    b = min(blocks, n // 2)
+    if b < 2:
+        return math.nan
+    stretch = np.diff(history * times, prepend=0.0)
+    span = np.diff(times, prepend=0.0)
+    rates = [s.sum() / d.sum() for s, d in zip(np.array_split(stretch, b), np.array_split(span, b))]
+    return float(np.std(rates, ddof=1) / math.sqrt(b))
 
 
 def point_data(data: dict, keys: tuple, values: tuple) -> dict:

@@ -49,17 +49,37 @@ VARIABLES = {
     "energy_initial": ("total mechanical energy (first integral on a turning plane) at t = 0", "J"),
     "energy_final": ("total mechanical energy at t_final", "J"),
     "final_state": ("state at t_final: coordinates, then their rates", ""),
-    "impact_n": ("collision number within the run (0: empty slot)", ""),
-    "impact_t": ("collision time", "s"),
-    "impact_i": ("body before the contact, from 1 (0: empty slot)", ""),
-    "impact_j": ("body after the contact, from 1 (0: empty slot)", ""),
-    "impact_q_i": ("coordinate of body i at the collision", "{q}"),
-    "impact_q_j": ("coordinate of body j at the collision", "{q}"),
-    "impact_dq_i_before": ("rate of body i before the collision", "{q}/s"),
-    "impact_dq_j_before": ("rate of body j before the collision", "{q}/s"),
-    "impact_dq_i_after": ("rate of body i after the collision", "{q}/s"),
-    "impact_dq_j_after": ("rate of body j after the collision", "{q}/s"),
 }
+#: The impact columns, kept as the last M (impact_*, --keep impacts:M) or the first M (first_impact_*, first:M).
+_IMPACT = {
+    "n": ("collision number within the run (0: empty slot)", ""),
+    "t": ("collision time", "s"),
+    "i": ("body before the contact, from 1 (0: empty slot)", ""),
+    "j": ("body after the contact, from 1 (0: empty slot)", ""),
+    "q_i": ("coordinate of body i at the collision", "{q}"),
+    "q_j": ("coordinate of body j at the collision", "{q}"),
+    "dq_i_before": ("rate of body i before the collision", "{q}/s"),
+    "dq_j_before": ("rate of body j before the collision", "{q}/s"),
+    "dq_i_after": ("rate of body i after the collision", "{q}/s"),
+    "dq_j_after": ("rate of body j after the collision", "{q}/s"),
+}
+for _prefix, _which in (("impact_", "last"), ("first_impact_", "first")):
+    for _c, (_text, _units) in _IMPACT.items():
+        VARIABLES[f"{_prefix}{_c}"] = (f"{_text} ({_which} impacts kept, oldest first)", _units)
+VARIABLES.update({
+    "strobe_t": ("time of a stroboscopic sample (once a forcing period; the last M kept, oldest first)", "s"),
+    "strobe_state": ("state at a stroboscopic sample: coordinates, then their rates", ""),
+    "period": ("period p of the impact sequence: the smallest p <= 32 with which its last max(16, 2p) impacts "
+               "repeat (pair, positions, outgoing rates to 1e-6 relative); 0: none (transient or chaotic); "
+               "-1: not run", ""),
+    "period_time": ("time T of one cycle of p impacts (nan where period is 0)", "s"),
+    "lyapunov": ("largest Lyapunov exponent (Benettin, heyroll.analysis.horizon.lyapunov_estimate) over "
+                 "the point's run time; nan where not estimated (see lyapunov_message)", "1/s"),
+    "lyapunov_error": ("standard error of lyapunov over blocks of renormalisation segments", "1/s"),
+    "lyapunov_message": ("the estimate's summary, or why there is none", ""),
+    "rotation": ("rotation number: net turns of body 1 per second, (phi_final - phi_initial) / (2 pi t_final); "
+                 "circle scenes only (nan elsewhere)", "1/s"),
+})
 COORDINATE_UNITS = {"phi": "rad", "s": "m", "x": "m"}
 
 
@@ -92,15 +112,23 @@ def template(plan: SweepPlan, attrs: dict):
         for axis in plan.axes:
             dtype = np.int64 if axis.key.whole else float
             coords[axis.key.text] = (axis.key.text, np.array([dtype(v) for v in axis.values]), _key_attrs(plan, axis.key))
-    if plan.keep:
-        coords["impact"] = ("impact", np.arange(plan.keep))
+    for dim, m in (("impact", plan.keep.impacts), ("first_impact", plan.keep.first), ("strobe", plan.keep.strobe)):
+        if m:
+            coords[dim] = (dim, np.arange(m))
     return xr.Dataset(variables, coords=coords, attrs=attrs)
 
 
 def _dims(name: str, dims: tuple) -> tuple:
-    """A variable's dimensions: the point dimensions, then ``state`` or ``impact`` for the per-point vectors."""
+    """A variable's dimensions: the point dimensions, then ``state``, ``impact``, ``first_impact`` or ``strobe``
+    (and ``state``) for the per-point vectors."""
     if name == "final_state":
         return dims + ("state",)
+    if name == "strobe_t":
+        return dims + ("strobe",)
+    if name == "strobe_state":
+        return dims + ("strobe", "state")
+    if name.startswith("first_impact_"):
+        return dims + ("first_impact",)
     return dims + ("impact",) if name.startswith("impact_") else dims
 
 
@@ -141,7 +169,7 @@ def check_spec(path: Path, plan: SweepPlan, versions: dict) -> None:
         raise SweepStoreError("--out", f"{path} exists and is not a heyroll sweep store: use another --out or remove it")
     old, new = json.loads(stored[SPEC_ATTR]), json.loads(json.dumps(plan.spec()))
     if old != new:
-        what = ", ".join(k for k in new if old.get(k) != new.get(k)) or "format"
+        what = ", ".join(k for k in [*new, *(k for k in old if k not in new)] if old.get(k) != new.get(k)) or "format"
         raise SweepStoreError("--out", f"{path} belongs to a different sweep ({what} differ): "
                               "use another --out, or remove it to start again")
     if stored.get("versions") != versions:

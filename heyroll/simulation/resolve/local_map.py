@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...model._numbers import workprec
+from .friction import slipping, slipping_law
 from ..contact_function import CONTACT_VALUES, evaluate
 from .constraints import cluster_impact
 from ..events import (
@@ -51,6 +52,7 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
                                    for u in (contact.unit_a, contact.unit_b)) else None
     num = system.precision.number
     law = scene.law
+    rough = bool(system.friction_blocks)
     ci1, Mi1, Gi1 = law_constants(scene, scene.bodies[pair.i], num)
     cj1, Mj1, Gj1 = law_constants(scene, scene.bodies[pair.j], num)
     ps, pm = law.scale_power, law.inertia_power
@@ -110,16 +112,26 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
                 if limit is not None and log.count >= limit:
                     return stop_at_max_collisions(stop, limit)
                 return not log.events_exhausted()
-        ci = ci1 * si**ps if ps else ci1
-        cj = cj1 * sj**ps if ps else cj1
-        Mi = Mi1 * si**pm if pm else Mi1
-        Mj = Mj1 * sj**pm if pm else Mj1
+        if rough and (slipping(holder, pair.i, scene) or slipping(holder, pair.j, scene)):
+            # a rolling body that slips: Newton's law with kappa_eff m sigma^2 (resolve.friction.slipping_law)
+            _law, bi, bj = slipping_law(scene, pair.i, pair.j, slipping(holder, pair.i, scene),
+                                        slipping(holder, pair.j, scene))
+            with workprec():
+                Mi, Mj = num(bi.kappa * bi.mass) * si * si, num(bj.kappa * bj.mass) * sj * sj
+            ci = cj = num(1)
+            law_flag = 3
+        else:
+            ci = ci1 * si**ps if ps else ci1
+            cj = cj1 * sj**ps if ps else cj1
+            Mi = Mi1 * si**pm if pm else Mi1
+            Mj = Mj1 * sj**pm if pm else Mj1
+            law_flag = 0
         du = ci * vi - cj * vj
         total = Mi + Mj
         vi_new = vi - one_k * Mj / total * du / ci
         vj_new = vj + one_k * Mi / total * du / cj
         closing = gi * vi + gj * vj
-        flag = 0
+        flag = law_flag
         if gi * vi_new + gj * vj_new < -tiny * abs(closing):
             if strict:
                 records.append((t, contact.pair_index, s.tolist(), vi_new, vj_new, 0))
