@@ -489,3 +489,19 @@ def test_resume_with_estimates_gives_the_identical_store(tmp_path):
     invalid = whole.isel({"bodies[1].phi": 3})  # phi = 2 overlaps ball 2: recorded with its error
     assert str(invalid["status"].values) == "invalid_scene" and int(invalid["period"]) == -1
     assert np.isnan(float(invalid["lyapunov"])) and str(invalid["lyapunov_message"].values) == ""
+
+
+def test_the_cli_passes_precision_and_picks_poincare_points(tmp_path):
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "sweep", "--values",
+                           "collision.restitution=0.9,1", "--precision", "long", "--workers", "1", "--t-end", "1",
+                           "--no-figures", "--out", str(out)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert open_sweep(out / "sweep.zarr").attrs["precision"] == "long"
+    bad = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "sweep", "--values",
+                          "collision.restitution=0.9,1", "--precision", "single", "--out", str(tmp_path / "bad")],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "--precision" in bad.stderr and bad.stderr.count("\n") == 1
+    plot = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "plot", str(out / "sweep.zarr"),
+                           "--points", "x"], capture_output=True, text=True, timeout=120)
+    assert plot.returncode == 2 and "--points" in plot.stderr

@@ -398,7 +398,10 @@ def _add_sweep_parsers(sub) -> None:
                        help="random points, uniform in [LO, HI) for each KEY (with --samples, --seed)")
     sweep.add_argument("--samples", help="number of random points")
     sweep.add_argument("--seed", help="seed of the random points (default 0)")
-    sweep.add_argument("--keep", help="summary (default) or impacts:M, the last M impacts of each point")
+    sweep.add_argument("--keep", help="what each point keeps, a comma list: summary (default), impacts:M (the last "
+                                      "M impacts), first:M, strobe:M (forced scenes: the last M stroboscopic "
+                                      "samples), period, lyapunov, rotation (per-point estimates; see README)")
+    sweep.add_argument("--precision", help="double (default), long, quad or mp:BITS for every point")
     sweep.add_argument("--out", default="heyroll-sweep", help="output directory (default: heyroll-sweep)")
     sweep.add_argument("--workers", help="worker processes of a local Dask cluster (default: all cores; 1 runs "
                                          "in this process, without Dask)")
@@ -413,7 +416,10 @@ def _add_sweep_parsers(sub) -> None:
     plot.add_argument("store", help="a sweep store, DIR/sweep.zarr")
     plot.add_argument("--out", help="directory of the figures (default: the store's directory)")
     plot.add_argument("--scalar", help="the per-point scalar of the maps: energy_loss, collisions, t_final, "
-                                       "relative_energy_change (default: energy_loss and collisions)")
+                                       "relative_energy_change, and period, period_time, lyapunov, rotation "
+                                       "when kept (default: energy_loss, collisions and the estimates kept)")
+    plot.add_argument("--points", help="flat point numbers (C order, as in the store), comma list: the points "
+                                       "whose Poincare section is drawn (with strobe:M kept)")
 
 
 def _sweep_extra() -> None:
@@ -441,7 +447,7 @@ def _sweep(args, argv: list) -> int:
         raise BadInput("--workers", "a --scheduler's cluster has its own workers: give one or the other")
     out = _out_dir(args.out)
     plan = make_plan(args.scene, grid=args.grid, random=args.random, samples=args.samples, seed=args.seed,
-                     keep=args.keep, t_end=t_end, max_collisions=max_collisions)
+                     keep=args.keep, t_end=t_end, max_collisions=max_collisions, precision=args.precision)
     print(f"{plan.n_points} points: " + " x ".join(f"{d} ({n})" for d, n in zip(plan.dims, plan.shape))
           + (f" over {', '.join(k.text for k in plan.keys)}" if plan.sample is not None else ""))
     try:
@@ -464,10 +470,10 @@ def _sweep(args, argv: list) -> int:
     return EXIT_OK
 
 
-def _write_sweep_figures(store: Path, out: Path, scalar) -> None:
+def _write_sweep_figures(store: Path, out: Path, scalar, points=None) -> None:
     from ..sweep.figures import sweep_figures
 
-    paths = sweep_figures(store, out, scalar)
+    paths = sweep_figures(store, out, scalar, points)
     for path in paths:
         print(f"wrote {path}")
     if not paths:
@@ -490,7 +496,15 @@ def _plot(args) -> int:
         raise SweepStoreError("store", f"{store} is not a heyroll sweep store")
     out = _out_dir(args.out) if args.out is not None else store.parent
     _writable(out)
-    _write_sweep_figures(store, out, args.scalar)
+    points = None
+    if args.points is not None:
+        try:
+            points = [int(x) for x in args.points.split(",") if x.strip()]
+        except ValueError:
+            raise BadInput("--points", f"must be whole point numbers, comma separated, got {args.points!r}") from None
+        if not points or min(points) < 0:
+            raise BadInput("--points", f"must be point numbers >= 0, got {args.points!r}")
+    _write_sweep_figures(store, out, args.scalar, points)
     return EXIT_OK
 
 
