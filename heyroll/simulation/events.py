@@ -182,26 +182,13 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
         warnings = warnings + [_strobe_recorder(log, system)]
     if not system.friction_blocks:
         return handlers, warnings, settle
-    from .resolve.friction import BLOCK_VALUES, FrictionModes
+    from .resolve.friction import FrictionModes
 
     modes = FrictionModes(scene, system, friction, holder, log, time_scale)
     n_impacts = len(system.contacts) + len(system.link_expressions) + len(system.bound_expressions)
 
-    records, record_modes, body_modes = log.records, log.record_modes, friction.modes
+    records, body_modes = log.records, friction.modes
     pair_bodies = [(p.i, p.j) for p in scene.pairs]
-    # A slipping body's spin is unchanged by an impulse through its centre: u = sigma q' - w before.
-    slipping = {block.members[0]: (b, block) for b, block in enumerate(system.friction_blocks) if block.rolls}
-
-    def spin(k, before) -> float:
-        if k not in slipping or body_modes_before[k] == "rolling":
-            return math.nan
-        b, block = slipping[k]
-        sigma = float(modes._evaluate(before_array[0], before_time[0])[BLOCK_VALUES * b + 2])
-        return sigma * float(before[block.rate]) - float(before[block.slip])
-
-    body_modes_before: list = []
-    before_array: list = [None]
-    before_time: list = [0.0]
 
     def wrapped(handler):
         def on_impact(ta, d_sgn):
@@ -209,9 +196,6 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
             before = s.tolist()
             was = list(body_modes)
             first = len(records)
-            if slipping:
-                body_modes_before[:] = was
-                before_array[0], before_time[0] = s.copy(), ta.time
             modes.begin(before)
             modes.impact_state = before
             # Records are handed on (log.on_full) only once the modes after the impact are known.
@@ -221,11 +205,9 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
             finally:
                 log.chunk_size = size
             fill_record_modes(log, body_modes, pair_bodies, first)  # any earlier ones: the modes they had
+            spins = modes.spins(before, ta.time, was)  # (before the modes' sync: its state then)
             modes.reconcile(ta, s, ta.time)  # (modes synced inside the handler reach the integrator)
-            for record in records[first:]:
-                i, j = pair_bodies[record[1]]
-                spins = (spin(i, before), spin(j, before)) if slipping else (math.nan, math.nan)
-                record_modes.append((was[i], was[j], body_modes[i], body_modes[j]) + spins)
+            fill_record_modes(log, body_modes, pair_bodies, was=was, spins=spins)
             if len(records) >= size and log.on_full is not None and log.stop.reason != "merge":
                 log.on_full()
             return go_on
@@ -239,13 +221,16 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
     return handlers, warnings, settle
 
 
-def fill_record_modes(log, body_modes, pair_bodies, upto=None) -> None:
-    """Give the records that have no friction modes yet (collisions at the start of a mode, in
-    the settler) the bodies' present modes, before and after, up to record ``upto``."""
+def fill_record_modes(log, body_modes, pair_bodies, upto=None, was=None, spins=None) -> None:
+    """Give the records that have no friction modes yet, up to record ``upto``, the bodies' modes:
+    ``was`` before (default: the present ones) and the present ones after; ``spins[k]``: the speed
+    body k's spin rolls at where it slipped before (FrictionModes.spins; nan: rolling)."""
     records, record_modes = log.records, log.record_modes
+    was = body_modes if was is None else was
     for record in records[len(record_modes): len(records) if upto is None else upto]:
         i, j = pair_bodies[record[1]]
-        record_modes.append((body_modes[i], body_modes[j], body_modes[i], body_modes[j], math.nan, math.nan))
+        u = (spins[i], spins[j]) if spins is not None else (math.nan, math.nan)
+        record_modes.append((was[i], was[j], body_modes[i], body_modes[j]) + u)
 
 
 def _strobe_recorder(log, system):

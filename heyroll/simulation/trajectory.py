@@ -98,6 +98,9 @@ def _dense_branches(result, breaks, ends, points, t_stop) -> list[Branch]:
         from .driver import simulate
 
         result = simulate(result.scene, t_end=t_stop, max_collisions=None, dense=True)
+    if not result.dense:  # a run that stopped before its first step: the recorded states alone
+        return [Branch(times=np.array([t0]), states=np.atleast_2d(np.asarray(state, dtype=float)))
+                for t0, state, _ in breaks]
     branches = []
     for n, (t0, _state, _) in enumerate(breaks):
         t1 = ends[n]

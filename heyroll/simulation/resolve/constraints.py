@@ -64,7 +64,7 @@ def project_onto_contacts(system, state: list, pars) -> list:
     return s
 
 
-def cluster_impact(system, s, pars, contact, grad, closing, restitution):
+def cluster_impact(system, s, pars, contact, grad, closing, restitution, slipping=()):
     """A body or cluster hits a cluster, or a unit resting on a stop: Newton's law on the gap rate
     with the clusters kept rigid through the impact (flag 2, as on the circle).
 
@@ -86,9 +86,11 @@ def cluster_impact(system, s, pars, contact, grad, closing, restitution):
     bodies = evaluate(body_function(system), s, pars).tolist()
     chain = list(ua.members + ub.members)
     inverse = []
+    slip = dict(slipping)  # (body, kappa) of rolling bodies that slip: their translational mass m
     for k in chain:
         pinned = system.units[system.unit_of[k]].pinned
-        inverse.append(0 if pinned else 1 / (system.precision.number(system.rolling_mass[k]) * bodies[BODY_VALUES * k + 3] ** 2))
+        mass = system.precision.number(system.rolling_mass[k] / slip[k] if k in slip else system.rolling_mass[k])
+        inverse.append(0 if pinned else 1 / (mass * bodies[BODY_VALUES * k + 3] ** 2))
     grads, rhs = [], []
     for x, y in zip(chain, chain[1:]):
         if (x, y) == (contact.pair.i, contact.pair.j):

@@ -29,6 +29,8 @@ import functools
 
 import heyoka as hy
 
+import numpy as np
+
 from ..compiled_cache import CompiledCache
 from ..contact_function import evaluate
 from ..friction import MODES
@@ -272,6 +274,22 @@ class FrictionModes:
                     self._note(t, s, block, new)
                     self.log.friction_transitions += 1
                 values = None
+
+    def spins(self, before, t, was) -> list:
+        """Per body: u = sigma q' - w, the speed its spin rolls at, where it slipped in state
+        ``before`` (modes ``was``); nan where it rolled. An impulse through a slipping body's centre
+        leaves u: the collision table's energies count it (result.build_collision_table)."""
+        out = [float("nan")] * len(self.scene.bodies)
+        values = None
+        for b, block in enumerate(self.system.friction_blocks):
+            k = block.members[0]
+            if not block.rolls or was[k] == "rolling":
+                continue
+            if values is None:
+                values = self._evaluate(np.asarray(before), t)
+            sigma = float(values[BLOCK_VALUES * b + 2])
+            out[k] = sigma * float(before[block.rate]) - float(before[block.slip])
+        return out
 
     def begin(self, before) -> None:
         """An impact's callback starts: ``before`` is the state (rates, slips) before it."""

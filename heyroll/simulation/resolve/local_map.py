@@ -103,7 +103,8 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         seen[:] = (float(acc), gi, gj, float(si), float(sj), float(vi), float(vj))
         if held is not None:
             # A cluster or a unit on a stop takes part: rigid through the impact if its contacts push.
-            rates = cluster_impact(system, s, pars, contact, (gi, gj), gi * vi + gj * vj, law_k)
+            slips = tuple((k, scene.bodies[k].kappa) for k in (pair.i, pair.j) if rough and slipping(holder, k, scene))
+            rates = cluster_impact(system, s, pars, contact, (gi, gj), gi * vi + gj * vj, law_k, slips)
             if rates is not None:
                 before = s.tolist()
                 for body, rate in rates.items():
@@ -145,6 +146,8 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
                 )
                 return False
             Gi, Gj = Gi1 * si * si, Gj1 * sj * sj
+            if law_flag == 3:  # a slipping body's translational mass (its kappa_eff = 1)
+                Gi, Gj = Mi, Mj
             impulse = -one_k * closing / (gi * gi / Gi + gj * gj / Gj)
             vi_new, vj_new = vi + impulse * gi / Gi, vj + impulse * gj / Gj
             flag = 1
