@@ -1022,3 +1022,35 @@ def test_a_body_squeezed_between_a_plastic_stop_and_a_neighbour():
                     track_sides="one", frame=Frame.make("2.0", 0), limiter_restitution=0, run=RunSettings.make(1, 200))
     result = heyroll.simulate(sc)
     assert result.status is Status.COMPLETED, result.message
+
+
+def test_ctrl_c_while_a_run_compiles_ends_it_interrupted_not_with_a_traceback(monkeypatch):
+    """Found by CI on a slow machine: SIGTERM 2 s after the table file appeared landed in the first
+    mode's compilation (before the integration, where Ctrl-C was caught): a traceback. Now the run ends
+    with status interrupted there too, and also when a later mode is compiling."""
+    import heyroll.simulation.driver as driver
+
+    sc = scene([body(phi="-1.0"), body(shape="disk", mass="2.0", phi="0.5")], k="0.0", t_end="5")
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(driver, "_start", interrupted)
+        result = heyroll.simulate(sc)
+    assert result.status is Status.INTERRUPTED and float(result.t_final) == 0.0
+    assert result.n_collisions == 0 and np.array_equal(result.final_state, result.initial_state)
+    real = driver._integrator
+    calls = []
+
+    def second_compile_interrupted(system, options, cooldown, quick=False):
+        calls.append(quick)
+        if len(calls) > 1:  # a later mode (the plastic pair's persistent contact)
+            raise KeyboardInterrupt
+        return real(system, options, cooldown, quick)
+
+    with monkeypatch.context() as m:
+        m.setattr(driver, "_integrator", second_compile_interrupted)
+        result = heyroll.simulate(sc)
+    assert len(calls) == 2 and result.status is Status.INTERRUPTED and result.n_collisions >= 1
+    assert "between two stretches of integration" in result.message

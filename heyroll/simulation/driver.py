@@ -222,7 +222,14 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
     friction = FrictionState(scene, precision, initial_modes(scene), [num(w) for w in scene.slip]) \
         if scene.rough else None
     stream.friction, stream.pair_bodies = friction, [(p.i, p.j) for p in scene.pairs]
-    start = _start(scene, precision, pairs)
+    try:
+        start = _start(scene, precision, pairs)
+    except KeyboardInterrupt:  # while the first mode compiles: nothing integrated, outputs still whole
+        start = _Start(tuple(num(x) for x in scene.phi) + tuple(num(x) for x in scene.dphi),
+                       singleton_units(len(scene.bodies)),
+                       tuple(num(x) for x in scene.phi) + tuple(num(x) for x in scene.dphi), None,
+                       tuple(piece_of(scene.track, b, q) for b, q in zip(scene.bodies, scene.q)),
+                       ("interrupted", "interrupted at t = 0 s while the run was being set up (compiling)"))
     units, first_system = start.units, start.system
     full_state = list(start.state)
     initial_state = np.array(start.initial_state)
@@ -245,118 +252,126 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
     split_pair = None  # scene pair index of a contact that has just split
     same_instant = 0  # mode changes in a row at one instant (bounded: see MAX_CHANGES_AT_ONE_INSTANT)
     while limit != 0 and not start_limit:
-        system = first_system if first else build_system(scene, precision, pairs=pairs, units=units)
-        later_mode, first = not first, False
-        holder: list = [None, None, None]  # state, parameters, the mode's FrictionModes (rough tracks)
-        handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale, pieces, friction)
-        cooldown = precision.number(precision.epsilon * time_scale)
-        # The first mode is compiled optimized; a later one (a cluster forming or splitting,
-        # a body coming to rest) quickly first (see QUICK_STEPS), also when the optimized one is
-        # cached already: the two round differently, and a run must not depend on what ran before.
-        quick = later_mode
-        ta, slots, nt_slots = _integrator(system, options, cooldown, quick=quick)
-        slots[:], nt_slots[:] = handlers, warnings
-        params = parameters_on_pieces(scene, system, pieces) if system.piece_blocks else list(system.parameters)
-        ta.pars[:] = params[: len(ta.pars)]  # heyoka keeps those up to the last one used
-        if system.per_body and (system.links or any(u.pinned for u in units)):
-            full_state = project_onto_contacts(system, full_state, params)
-        ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra
-        ta.dtime = t
-        if slots:
-            ta.reset_cooldowns()
-        touched = getattr(settle, "touched", [])  # the circle's gap reopening checks (events.reopening_check)
-        touched[:] = [ta.dtime] * len(touched)
-        # The full parameter vector (compiled contact functions may read some that the
-        # integrator does not keep); the junction callbacks update it and the integrator's.
-        holder[0], holder[1] = ta.state, np.array(params)
-        stream.ta = ta
-        _reset(log.stop)
-        # Pairs touching as the mode starts (bodies that start so, the rest of a
-        # cascade, a contact that has just split): collide, enter contact, or
-        # open by a few ulps so that their events can see them close again.
-        skip_merge = {n for n, c in enumerate(system.contacts) if c.pair_index == split_pair}
-        split_pair = None
-        friction_modes = getattr(settle, "friction", None)
-        if friction_modes is not None:  # each unit's friction mode from the run's modes and the state now
-            friction_modes.start(ta, ta.state, ta.time)
-            friction_modes.begin(ta.state.tolist())
-            was = list(friction.modes)
-            spins = friction_modes.spins(ta.state.tolist(), ta.time, was)
-        settled = settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
-        if friction_modes is not None:  # the modes follow the rates collisions at the mode's start left
-            friction_modes.reconcile(ta, ta.state, ta.time)
-            fill_record_modes(log, friction.modes, stream.pair_bodies, was=was, spins=spins)
-        if settled:
+        try:
+            system = first_system if first else build_system(scene, precision, pairs=pairs, units=units)
+            later_mode, first = not first, False
+            holder: list = [None, None, None]  # state, parameters, the mode's FrictionModes (rough tracks)
+            handlers, warnings, settle = mode_handlers(scene, system, log, holder, time_scale, pieces, friction)
+            cooldown = precision.number(precision.epsilon * time_scale)
+            # The first mode is compiled optimized; a later one (a cluster forming or splitting,
+            # a body coming to rest) quickly first (see QUICK_STEPS), also when the optimized one is
+            # cached already: the two round differently, and a run must not depend on what ran before.
+            quick = later_mode
+            ta, slots, nt_slots = _integrator(system, options, cooldown, quick=quick)
+            slots[:], nt_slots[:] = handlers, warnings
+            params = parameters_on_pieces(scene, system, pieces) if system.piece_blocks else list(system.parameters)
+            ta.pars[:] = params[: len(ta.pars)]  # heyoka keeps those up to the last one used
+            if system.per_body and (system.links or any(u.pinned for u in units)):
+                full_state = project_onto_contacts(system, full_state, params)
+            ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra
+            ta.dtime = t
+            if slots:
+                ta.reset_cooldowns()
+            touched = getattr(settle, "touched", [])  # the circle's gap reopening checks (events.reopening_check)
+            touched[:] = [ta.dtime] * len(touched)
+            # The full parameter vector (compiled contact functions may read some that the
+            # integrator does not keep); the junction callbacks update it and the integrator's.
+            holder[0], holder[1] = ta.state, np.array(params)
+            stream.ta = ta
+            _reset(log.stop)
+            # Pairs touching as the mode starts (bodies that start so, the rest of a
+            # cascade, a contact that has just split): collide, enter contact, or
+            # open by a few ulps so that their events can see them close again.
+            skip_merge = {n for n, c in enumerate(system.contacts) if c.pair_index == split_pair}
+            split_pair = None
+            friction_modes = getattr(settle, "friction", None)
+            if friction_modes is not None:  # each unit's friction mode from the run's modes and the state now
+                friction_modes.start(ta, ta.state, ta.time)
+                friction_modes.begin(ta.state.tolist())
+                was = list(friction.modes)
+                spins = friction_modes.spins(ta.state.tolist(), ta.time, was)
+            settled = settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
+            if friction_modes is not None:  # the modes follow the rates collisions at the mode's start left
+                friction_modes.reconcile(ta, ta.state, ta.time)
+                fill_record_modes(log, friction.modes, stream.pair_bodies, was=was, spins=spins)
+            if settled:
+                full_state = system.expand(ta.state.tolist())
+                modes[-1] = dataclasses.replace(modes[-1], state=tuple(full_state))
+                overlap = _overlap(scene, precision, full_state, "at the start of a mode")
+                if overlap:
+                    log.stop.reason, log.stop.message = "overlap", overlap
+                else:
+                    optimized = _optimized_successor(system, options, cooldown, handlers, warnings, holder, stream) \
+                        if quick else None
+                    outcome, n_steps, ta = _propagate(
+                        ta, log, precision.number(t_end), dense,
+                        None if system.per_body or system.n_units == len(scene.bodies) else system.expand, optimized)
+                    steps += n_steps
             full_state = system.expand(ta.state.tolist())
-            modes[-1] = dataclasses.replace(modes[-1], state=tuple(full_state))
-            overlap = _overlap(scene, precision, full_state, "at the start of a mode")
-            if overlap:
-                log.stop.reason, log.stop.message = "overlap", overlap
-            else:
-                optimized = _optimized_successor(system, options, cooldown, handlers, warnings, holder, stream) \
-                    if quick else None
-                outcome, n_steps, ta = _propagate(
-                    ta, log, precision.number(t_end), dense,
-                    None if system.per_body or system.n_units == len(scene.bodies) else system.expand, optimized)
-                steps += n_steps
-        full_state = system.expand(ta.state.tolist())
-        if friction_modes is not None:
-            friction_modes.finish(ta.state)
-        t = ta.dtime
-        reason = log.stop.reason
-        if reason == "merge" and friction is not None:
-            contact = system.contacts[log.stop.data["contact"]]
-            slipping_bodies = [k for k in (contact.pair.i, contact.pair.j)
-                               if scene.bodies[k].kappa != 1 and friction.modes[k] in ("sliding+", "sliding-")]
-            if slipping_bodies:
-                # A cluster's members roll (or stick) together; a body that slips would keep its
-                # spin apart from the cluster's motion: not modelled (review: its spin energy vanished
-                # at the merge and its old slip came back at the split, energy created).
-                log.stop.reason = "slip"
-                log.stop.message = (
-                    f"body {slipping_bodies[0] + 1} slips as it enters persistent contact with body "
-                    f"{(contact.pair.j if slipping_bodies[0] == contact.pair.i else contact.pair.i) + 1} at t = "
-                    f"{float(t[0]):.17g} s: slipping inside a cluster is not modelled; stopped")
-                break
-        if reason in ("merge", "split", "release", "rest"):
-            overlap = _overlap(scene, precision, full_state, "at the end of a mode")
-            if overlap:
-                log.stop.reason, log.stop.message = "overlap", overlap
-                break
-            same_instant = same_instant + 1 if float(t[0]) == modes[-1].t else 0
-            if same_instant > MAX_CHANGES_AT_ONE_INSTANT * len(scene.bodies):
-                log.stop.reason = "failed"
-                log.stop.message = (
-                    f"contacts kept merging and splitting at t = {float(t[0]):.17g} s "
-                    f"({same_instant} mode changes at one instant); stopped"
-                )
-                break
-        if reason == "merge" and system.per_body:
-            contact = system.contacts[log.stop.data["contact"]]
-            units = _join(scene, units, contact.unit_a, contact.unit_b)
-            contacts_open[(contact.pair.i, contact.pair.j)] = float(t[0])
-        elif reason == "rest":
-            u = system.unit_of[log.stop.data["body"]]
-            units = units[:u] + (dataclasses.replace(units[u], pinned=log.stop.data["end"]),) + units[u + 1:]
-        elif reason == "release":
-            units, opened = _release(units, log.stop.data["bodies"])
-            for i, j in opened:
+            if friction_modes is not None:
+                friction_modes.finish(ta.state)
+            t = ta.dtime
+            reason = log.stop.reason
+            if reason == "merge" and friction is not None:
+                contact = system.contacts[log.stop.data["contact"]]
+                slipping_bodies = [k for k in (contact.pair.i, contact.pair.j)
+                                   if scene.bodies[k].kappa != 1 and friction.modes[k] in ("sliding+", "sliding-")]
+                if slipping_bodies:
+                    # A cluster's members roll (or stick) together; a body that slips would keep its
+                    # spin apart from the cluster's motion: not modelled (review: its spin energy vanished
+                    # at the merge and its old slip came back at the split, energy created).
+                    log.stop.reason = "slip"
+                    log.stop.message = (
+                        f"body {slipping_bodies[0] + 1} slips as it enters persistent contact with body "
+                        f"{(contact.pair.j if slipping_bodies[0] == contact.pair.i else contact.pair.i) + 1} at t = "
+                        f"{float(t[0]):.17g} s: slipping inside a cluster is not modelled; stopped")
+                    break
+            if reason in ("merge", "split", "release", "rest"):
+                overlap = _overlap(scene, precision, full_state, "at the end of a mode")
+                if overlap:
+                    log.stop.reason, log.stop.message = "overlap", overlap
+                    break
+                same_instant = same_instant + 1 if float(t[0]) == modes[-1].t else 0
+                if same_instant > MAX_CHANGES_AT_ONE_INSTANT * len(scene.bodies):
+                    log.stop.reason = "failed"
+                    log.stop.message = (
+                        f"contacts kept merging and splitting at t = {float(t[0]):.17g} s "
+                        f"({same_instant} mode changes at one instant); stopped"
+                    )
+                    break
+            if reason == "merge" and system.per_body:
+                contact = system.contacts[log.stop.data["contact"]]
+                units = _join(scene, units, contact.unit_a, contact.unit_b)
+                contacts_open[(contact.pair.i, contact.pair.j)] = float(t[0])
+            elif reason == "rest":
+                u = system.unit_of[log.stop.data["body"]]
+                units = units[:u] + (dataclasses.replace(units[u], pinned=log.stop.data["end"]),) + units[u + 1:]
+            elif reason == "release":
+                units, opened = _release(units, log.stop.data["bodies"])
+                for i, j in opened:
+                    intervals.append({"i": i + 1, "j": j + 1, "t_start": contacts_open.pop((i, j)), "t_end": float(t[0])})
+            elif reason == "merge":
+                contact = system.contacts[log.stop.data["contact"]]
+                units, full_state = _merge(scene, system, units, contact, full_state)
+                contacts_open[(contact.pair.i, contact.pair.j)] = float(t[0])
+            elif reason == "split":
+                link = system.links[log.stop.data["link"]]
+                units = _split(scene, units, link)
+                i, j = link_bodies(system, link)
+                split_pair = link.pair_index
                 intervals.append({"i": i + 1, "j": j + 1, "t_start": contacts_open.pop((i, j)), "t_end": float(t[0])})
-        elif reason == "merge":
-            contact = system.contacts[log.stop.data["contact"]]
-            units, full_state = _merge(scene, system, units, contact, full_state)
-            contacts_open[(contact.pair.i, contact.pair.j)] = float(t[0])
-        elif reason == "split":
-            link = system.links[log.stop.data["link"]]
-            units = _split(scene, units, link)
-            i, j = link_bodies(system, link)
-            split_pair = link.pair_index
-            intervals.append({"i": i + 1, "j": j + 1, "t_start": contacts_open.pop((i, j)), "t_end": float(t[0])})
-        else:
-            break
-        modes.append(ModeChange(float(t[0]), _clusters(units), tuple(full_state), _pinned(units)))
-        log.mode_changes += 1
-        if log.events_exhausted():
+            else:
+                break
+            modes.append(ModeChange(float(t[0]), _clusters(units), tuple(full_state), _pinned(units)))
+            log.mode_changes += 1
+            if log.events_exhausted():
+                break
+        except KeyboardInterrupt:
+            # Ctrl-C (or SIGTERM) outside the integration itself: while a mode compiles, between
+            # modes. The run ends there, with everything recorded so far (as in _propagate).
+            log.stop.reason = "interrupted"
+            log.stop.message = (f"interrupted at t = {float(t[0]):.17g} s after {log.count} collisions "
+                                "(between two stretches of integration)")
             break
 
     t_final = t[0] + t[1] if precision.name != "double" else float(t[0]) + float(t[1])
