@@ -224,7 +224,7 @@ class SceneSystem:
     def n_units(self) -> int:
         return len(self.units)
 
-    @property
+    @functools.cached_property
     def shape(self) -> tuple:
         """Everything the compiled code depends on (constants are parameters)."""
         return (
