@@ -298,11 +298,11 @@ def test_a_quad_run_finds_the_turning_point_to_quad_precision():
     with mpmath.workdps(50):  # the slope's angle beyond a double
         alpha = mpmath.atan(mpmath.mpf("0.3"))
         ref = rough.incline_sliding(alpha, "0.2", "0.5", 0, 2, G, 1)
-    t = result.transitions[0][0]
-    # transitions keep a double time; the position is in the run's own type
-    assert t == pytest.approx(float(ref.transitions[0].t), abs=2e-16)
+    t, x = result.transitions[0][0], result.transitions[0][4]
+    # transitions keep the run's own numbers: the instant and the place to quad precision
     with mpmath.workdps(40):
-        assert abs(mpmath.mpf(str(result.transitions[0][4])) - ref.transitions[0].x) < mpmath.mpf("1e-30")
+        assert abs(mpmath.mpf(str(t)) - ref.transitions[0].t) < mpmath.mpf("1e-30")
+        assert abs(mpmath.mpf(str(x)) - ref.transitions[0].x) < mpmath.mpf("1e-30")
 
 
 # -- scene files and the CLI ------------------------------------------------------------------------------
@@ -639,3 +639,20 @@ def test_collisions_at_a_modes_start_count_a_slipping_bodys_spin():
     result = simulate(scene)
     table = result.collision_table()
     assert table.size and np.all(table["energy_after"] - table["energy_before"] <= 1e-12)
+
+
+def test_a_quad_runs_transitions_and_stroboscopic_section_are_written_in_full_digits(tmp_path):
+    from heyroll.interfaces.outputs import write_run
+
+    scene = Scene.make(CurveTrack.make("x**2/2", -3, 3), [PARTICLE], [0], [0], friction="0.1", static_friction="0.2",
+                       forcing=Forcing.make("force", amplitude=2, frequency=2), track_sides="one",
+                       run=RunSettings.make(4))
+    result = simulate(scene, precision="quad")
+    write_run(result, tmp_path, scene_source="test", figures=False)
+    with open(tmp_path / "transitions.csv") as fh:
+        rows = list(csv.reader(fh))[1:]
+    with open(tmp_path / "stroboscopic.csv") as fh:
+        strobe = list(csv.reader(fh))[1:]
+    stop = next(r for r in rows if r[4] == "stuck")
+    assert len(stop[1].replace(".", "").lstrip("0")) >= 33  # t: 36 significant digits, not 17
+    assert len(strobe[1][1].replace(".", "").lstrip("0")) >= 33

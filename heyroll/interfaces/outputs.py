@@ -249,10 +249,12 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
         atomic_write_text(out_dir / "passages.csv", collisions_csv(result.passage_table()))
         files["passages"] = "passages.csv"
     if result.scene.rough:  # every change of friction mode (see README, "Rough tracks")
-        atomic_write_text(out_dir / "transitions.csv", collisions_csv(result.transition_table()))
+        # (full digits of a quad or MPFR run's own numbers, as the collision table)
+        atomic_write_text(out_dir / "transitions.csv",
+                          collisions_csv(result.transition_table(native=True), result.precision.format))
         files["transitions"] = "transitions.csv"
     if result.scene.forcing is not None:  # the stroboscopic section: one row per forcing period
-        atomic_write_text(out_dir / "stroboscopic.csv", collisions_csv(strobe_table(result)))
+        atomic_write_text(out_dir / "stroboscopic.csv", collisions_csv(strobe_table(result), result.precision.format))
         files["stroboscopic"] = "stroboscopic.csv"
     if figures:
         from .figures import run_figures
@@ -270,8 +272,9 @@ def strobe_table(result: SimulationResult) -> np.ndarray:
     n = result.n_bodies
     c = result.scene.coordinate
     names = ["t"] + [f"{c}_{k + 1}" for k in range(n)] + [f"d{c}_{k + 1}" for k in range(n)]
-    rows = result.strobe_table
-    table = np.zeros(len(rows), dtype=[("n", np.int64)] + [(name, np.float64) for name in names])
+    rows = result.strobe_rows(native=True)
+    number = object if rows.dtype == object else np.float64
+    table = np.zeros(len(rows), dtype=[("n", np.int64)] + [(name, number) for name in names])
     table["n"] = np.arange(1, len(rows) + 1)
     for col, name in enumerate(names):
         table[name] = rows[:, col]

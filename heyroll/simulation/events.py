@@ -237,7 +237,7 @@ def _strobe_recorder(log, system):
     """Once a forcing period (nu t + psi = 2 pi n): the full state, the stroboscopic section."""
 
     def record(ta, t, d_sgn):
-        log.strobe.append((float(t), system.expand(ta.update_d_output(t).tolist())))
+        log.strobe.append((t, system.expand(ta.update_d_output(t).tolist())))  # (the run's own type)
 
     return record
 

@@ -395,18 +395,25 @@ class SimulationResult:
             total += 0.5 * float(body.mass) * (float(body.kappa) - 1) * ((v - w) ** 2 - v * v)
         return total
 
-    def transition_table(self) -> np.ndarray:
-        """Changes of friction mode, columns TRANSITION_COLUMNS (bodies from 1)."""
-        return transition_table(self.transitions)
+    def transition_table(self, native: bool = False) -> np.ndarray:
+        """Changes of friction mode, columns TRANSITION_COLUMNS (bodies from 1); float64, or with
+        ``native=True`` a quad or MPFR run's own numbers (object columns, for full digits in text)."""
+        return transition_table(self.transitions, native=native and self.precision.name != "double")
 
     @property
     def strobe_table(self) -> np.ndarray:
         """The stroboscopic section: rows t, q_1..q_N, dq_1..dq_N (float64)."""
+        return self.strobe_rows()
+
+    def strobe_rows(self, native: bool = False) -> np.ndarray:
+        """The stroboscopic section's rows t, q_1..q_N, dq_1..dq_N: float64, or with ``native=True``
+        a quad or MPFR run's own numbers (an object array)."""
         n = self.n_bodies
-        out = np.zeros((len(self.strobe), 1 + 2 * n))
+        native = native and self.precision.name != "double"
+        out = np.zeros((len(self.strobe), 1 + 2 * n), dtype=object if native else float)
         for r, (t, state) in enumerate(self.strobe):
-            out[r, 0] = t
-            out[r, 1:] = np.asarray(state[: 2 * n], dtype=float)
+            out[r, 0] = t if native else float(t)
+            out[r, 1:] = list(state[: 2 * n]) if native else np.asarray([float(x) for x in state[: 2 * n]])
         return out
 
     def collision_table(self, native: bool = False) -> np.ndarray:
@@ -487,11 +494,14 @@ def passage_table(passages, first_number: int = 1) -> np.ndarray:
     return table
 
 
-def transition_table(transitions, first_number: int = 1) -> np.ndarray:
-    """Friction transitions -> structured array, columns TRANSITION_COLUMNS (mode names as text)."""
-    dtype = [("n", np.int64), ("t", np.float64), ("body", np.int64), ("from", "U8"), ("to", "U8"),
-             ("q", np.float64), ("dq", np.float64)]
+def transition_table(transitions, first_number: int = 1, native: bool = False) -> np.ndarray:
+    """Friction transitions -> structured array, columns TRANSITION_COLUMNS (mode names as text);
+    ``native``: t, q, dq as recorded (a quad or MPFR run's own numbers, object columns)."""
+    number = object if native else np.float64
+    dtype = [("n", np.int64), ("t", number), ("body", np.int64), ("from", "U8"), ("to", "U8"),
+             ("q", number), ("dq", number)]
     table = np.zeros(len(transitions), dtype=dtype)
+    convert = (lambda x: x) if native else float
     for n, (t, body, old, new, q, dq) in enumerate(transitions):
-        table[n] = (first_number + n, float(t), body + 1, old, new, float(q), float(dq))
+        table[n] = (first_number + n, convert(t), body + 1, old, new, convert(q), convert(dq))
     return table

@@ -69,7 +69,7 @@ class FrictionState:
 
     def record(self, t, body, old, new, q, dq, work=0.0) -> None:
         if old != new:
-            self.transitions.append((float(t), body, old, new, q, dq))
+            self.transitions.append((t, body, old, new, q, dq))  # (t, q, dq in the run's own type)
             self.transition_work.append(work)
             self.modes[body] = new
 
