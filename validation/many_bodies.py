@@ -43,6 +43,7 @@ import numpy as np
 
 import heyroll
 from heyroll.interfaces.outputs import versions
+from _report import publish
 
 REPORT = Path(__file__).parent / "reports" / "many_bodies.md"
 SHAPES = ("solid_sphere", "disk", "ring")
@@ -184,9 +185,7 @@ def main(argv=None) -> None:
         )
     lines += ["", "Goals:", *goals(rows)]
     text = "\n".join(lines) + "\n"
-    print(text)
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(text, encoding="utf-8")
+    publish(text, args.output)
 
 
 if __name__ == "__main__":

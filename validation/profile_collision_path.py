@@ -29,6 +29,7 @@ from heyroll.simulation.driver import motion_time_scale
 from heyroll.simulation.events import mode_events
 from heyroll.simulation.precision import DOUBLE
 from heyroll.simulation.system import build_system
+from _report import publish
 
 REPORT = Path(__file__).parent / "reports" / "profile_collision_path.md"
 
@@ -113,9 +114,7 @@ def main(argv=None) -> None:
         f"collisions per second: {n / t_full:.3g}",
     ]
     text = "\n".join(lines) + "\n"
-    print(text)
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(text, encoding="utf-8")
+    publish(text, args.output)
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ from heyroll.interfaces.outputs import versions
 from heyroll.model.bodies import Body
 from heyroll.model.scene import RunSettings, Scene
 from heyroll.model.tracks import CircleTrack, CurveTrack
+from _report import publish
 
 SHAPES = ("solid_sphere", "disk", "ring", "hollow_sphere", "particle")
 CURVES = ("0.5*x**2", "0.3*x**4 - 0.4*x**2", "0.1*exp(2*x) + 0.1*exp(-2*x)")
@@ -99,9 +100,7 @@ def main() -> None:
         *failures,
     ]
     text = "\n".join(lines) + "\n"
-    print(text)
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(text, encoding="utf-8")
+    publish(text, args.output)
 
 
 if __name__ == "__main__":

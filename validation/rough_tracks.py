@@ -47,6 +47,7 @@ from heyroll.model.scene import RunSettings, Scene
 from heyroll.model.tracks import CircleTrack, CurveTrack, first_integral
 from heyroll.reference import rough
 from heyroll.simulation.driver import simulate
+from _report import publish
 
 REPORT = Path(__file__).parent / "reports" / "rough_tracks.md"
 DPS = 40
@@ -260,9 +261,7 @@ def main(argv=None) -> None:
     circle, balance = circle_rows(starts)
     rows = incline_rows() + circle + slip_rows()
     text = report(rows, balance, cost(t_end), args.quick)
-    print(text)
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(text, encoding="utf-8")
+    publish(text, args.output)
 
 
 if __name__ == "__main__":
