@@ -183,6 +183,12 @@ def _run(args) -> int:
     print(f"{result.status.value}: {result.message}")
     for warning in result.settings.get("warnings", []):
         print(f"warning: {warning}")
+    if getattr(result, "kind", None) == "table":
+        print(f"{result.n_collisions} impacts ({result.n_cushion} on the cushion), t_final = "
+              f"{float(result.t_final):.17g} s, energy {result.energy_initial:.17g} -> {result.energy_final:.17g} J, "
+              f"{result.wall_time_s:.3g} s wall ({rate:.3g} impacts/s incl. set-up)")
+        print(f"wrote {out}/")
+        return result.status.exit_code
     passages = result.summary()
     print(
         f"{result.n_collisions} collisions, {passages['limiter_impacts']} limiter impacts, "

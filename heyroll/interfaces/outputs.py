@@ -17,6 +17,7 @@ import numpy as np
 
 from .._version import __version__
 from .csv_text import collisions_csv, csv_rows
+from ..simulation.table.result import impact_table
 from ..simulation.result import (INTEGER_COLUMNS, PASSAGE_COLUMNS, SimulationResult,
                                  build_collision_table, table_columns)
 
@@ -59,7 +60,7 @@ class _TableFile:
         self.scene, self.pairs, self.precision = scene, pairs, precision
         self._file = open(self._tmp, "wb")
         self._start()
-        if scene.domain(0) is not None:  # an open track: passages.csv streamed beside the table
+        if not _is_table(scene) and scene.domain(0) is not None:  # an open track: passages.csv streamed beside the table
             self.passages_path = str(self._final.with_name("passages.csv"))
             self._passages_tmp = self._final.with_name(".passages.csv.tmp")
             self._passages = open(self._passages_tmp, "wb")
@@ -70,7 +71,12 @@ class _TableFile:
         self._passages.write(csv_rows(table))
         self.passage_rows += table.size
 
-    def write(self, chunk: tuple, first_number: int) -> None:
+    def write(self, chunk, first_number: int) -> None:
+        if _is_table(self.scene):  # billiards: the chunk is a list of impact records
+            table = impact_table(self.scene, chunk, self.precision, first_number, native=True)
+            self._append(table)
+            self.rows += table.size
+            return
         times, numbers, before, after, flags = chunk[:5]
         table = build_collision_table(
             self.scene, self.pairs, self.precision, times, numbers, before, after, flags,
@@ -102,6 +108,9 @@ class CsvTableSink(_TableFile):
         self._file.write((",".join(table_columns(self.scene)) + "\n").encode())
 
     def _append(self, table):
+        if _is_table(self.scene):  # a cell that does not apply (a cushion impact's ball j) is empty
+            self._file.write(csv_rows(table, _or_empty(self.precision.format)).replace(b",nan", b","))
+            return
         self._file.write(csv_rows(table, self.precision.format))
 
     def _finish(self):
@@ -124,7 +133,7 @@ class NpyTableSink(_TableFile):
         super().open(scene, pairs, precision)
 
     def _header(self, rows: int) -> bytes:
-        dtype = build_collision_table(self.scene, (), self.precision, [], [], [], [], []).dtype
+        dtype = _empty_table(self.scene, self.precision).dtype
         d = {"descr": np.lib.format.dtype_to_descr(dtype), "fortran_order": False, "shape": (rows,)}
         text = repr(d).encode("latin1")
         text += b" " * (self.HEADER_BYTES - 10 - len(text) - 1) + b"\n"
@@ -159,7 +168,7 @@ class ParquetTableSink(_TableFile):
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        dtype = build_collision_table(self.scene, (), self.precision, [], [], [], [], []).dtype
+        dtype = _empty_table(self.scene, self.precision).dtype
         self._schema = pa.schema([(name, pa.from_numpy_dtype(dtype[name])) for name in dtype.names])
         # A dictionary only where values repeat (body numbers, law flags): tried on the float
         # columns it made the write 4x slower (measured) for no saving.
@@ -173,6 +182,20 @@ class ParquetTableSink(_TableFile):
 
     def _finish(self):
         self._writer.close()
+
+
+def _is_table(scene) -> bool:
+    return getattr(scene, "kind", None) == "table"
+
+
+def _empty_table(scene, precision) -> np.ndarray:
+    if _is_table(scene):
+        return impact_table(scene, [], precision)
+    return build_collision_table(scene, (), precision, [], [], [], [], [])
+
+
+def _or_empty(format_value):
+    return lambda value: "" if value is None else format_value(value)
 
 
 TABLE_SINKS = {"csv": CsvTableSink, "npy": NpyTableSink, "parquet": ParquetTableSink}
@@ -189,7 +212,7 @@ def summary_dict(result: SimulationResult, *, scene_source: str, files: dict) ->
 #: The files a run writes (and their temporary names): what a new run in the same directory replaces.
 RUN_FILES = ("collisions.csv", "collisions.npy", "collisions.parquet", "passages.csv", "transitions.csv",
              "stroboscopic.csv", "summary.json", "phase_portrait.png", "energy.png", "friction_portrait.png",
-             "friction_energy.png", "stroboscopic.png", "impact_map.png")
+             "friction_energy.png", "stroboscopic.png", "impact_map.png", "table_paths.png", "birkhoff_map.png")
 
 
 def writable_problem(out: Path) -> str | None:
@@ -233,6 +256,8 @@ def table_sink(out_dir: Path, table_format: str = "csv") -> _TableFile:
 def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, figures: bool = True, sink=None) -> dict:
     """Write the table (unless ``sink`` streamed it), summary.json and the figures into ``out_dir``."""
     out_dir.mkdir(parents=True, exist_ok=True)
+    if _is_table(result.scene):
+        return _write_table_run(result, out_dir, scene_source=scene_source, figures=figures, sink=sink)
     if sink is None:
         sink = table_sink(out_dir, "csv")
         sink.open(result.scene, result.pairs, result.precision)
@@ -260,6 +285,25 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
         from .figures import run_figures
 
         files.update(run_figures(result, out_dir))
+    summary = summary_dict(result, scene_source=scene_source, files=files)
+    summary["table_format"] = sink.format
+    summary["table_rows"] = sink.rows
+    atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2, allow_nan=True) + "\n")
+    return summary
+
+
+def _write_table_run(result, out_dir: Path, *, scene_source: str, figures: bool, sink) -> dict:
+    """A billiard run's collisions table, summary.json and figures (table paths, Birkhoff map)."""
+    if sink is None:
+        sink = table_sink(out_dir, "csv")
+        sink.open(result.scene, None, result.precision)
+        sink.write(result.records, 1)
+        sink.close()
+    files = {"collisions": Path(sink.path).name, "summary": "summary.json"}
+    if figures:
+        from .table_figures import table_figures
+
+        files.update(table_figures(result, out_dir))
     summary = summary_dict(result, scene_source=scene_source, files=files)
     summary["table_format"] = sink.format
     summary["table_rows"] = sink.rows

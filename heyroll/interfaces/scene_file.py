@@ -25,7 +25,7 @@ from ..model.tracks import ArcChainTrack, CircleTrack, CurveTrack, ParametricTra
 #: it); a single run ignores it.
 TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "frame", "sweep", "forcing"}
 TRACK_KEYS = {"type", "radius", "friction", "static_friction", "sides"}
-TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs", "parametric")
+TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs", "parametric", "table")
 #: Keys of each path track type (paper section 5).
 PATH_TRACK_KEYS = {
     "curve": {"type", "y", "x_min", "x_max", "limiter_restitution", "sides", "friction", "static_friction"},
@@ -91,6 +91,10 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
         raise SceneError("name", "must be a string")
     g = _number(data, "g", "", default=STANDARD_GRAVITY)
     track_table = _table(data, "track", required=True)
+    if track_table.get("type") == "table":  # billiards (paper section 7)
+        from .table_file import table_scene_from_dict
+
+        return table_scene_from_dict(data, name)
     if isinstance(track_table.get("type"), str) and track_table["type"] in PATH_TRACK_KEYS:  # [] / {}: unhashable
         return _path_scene(data, track_table, name, g)
     frame = _frame(_table(data, "frame", required=False))

@@ -188,6 +188,10 @@ def simulate(
 
 
 def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResult:
+    if getattr(scene, "kind", None) == "table":  # billiards: balls on a table (paper section 7)
+        from .table.driver import simulate_table
+
+        return simulate_table(scene, opts, sink, progress)
     t_end, max_collisions, precision = opts.t_end, opts.max_collisions, opts.precision
     tolerance, high_accuracy, watch_all_contacts = opts.tolerance, opts.high_accuracy, opts.watch_all_contacts
     chunk_size = opts.chunk_size

@@ -73,6 +73,10 @@ MODE_COLUMNS = ("mode_i_before", "mode_j_before", "mode_i_after", "mode_j_after"
 
 def table_columns(scene: Scene) -> tuple:
     """The collision table's columns for ``scene``: TABLE_COLUMNS, then MODE_COLUMNS on a rough track."""
+    if getattr(scene, "kind", None) == "table":  # billiards (paper section 7)
+        from .table.result import IMPACT_COLUMNS
+
+        return IMPACT_COLUMNS
     return TABLE_COLUMNS + (MODE_COLUMNS if scene.rough else ())
 
 #: Columns of the friction transitions table (rough tracks, see README).

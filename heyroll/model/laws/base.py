@@ -75,15 +75,15 @@ class CollisionLaw(Protocol):
         ...
 
 
-def check_restitution(k) -> mpmath.mpf:
+def check_restitution(k, field: str = "collision.restitution") -> mpmath.mpf:
     from ...errors import SceneError
     from .._numbers import is_finite, to_mpf
 
     if not is_finite(k):
-        raise SceneError("collision.restitution", f"must be a finite number, got {k!r}")
+        raise SceneError(field, f"must be a finite number, got {k!r}")
     x = to_mpf(k)
     if not (0 <= x <= 1):
-        raise SceneError("collision.restitution", f"must be in [0, 1], got {k}")
+        raise SceneError(field, f"must be in [0, 1], got {k}")
     return x
 
 

@@ -1,0 +1,173 @@
+"""An elliptical table x^2/a^2 + y^2/b^2 <= 1 (paper Fig. 22).
+
+For a particle (R = 0) the wall is the ellipse itself. For a ball of radius
+R the centre moves inside the inner parallel curve at distance R, which is not
+a conic: it is the zero set of a polynomial of degree 8 in x, y (degree 4 in
+u = x^2, v = y^2), the resultant in lambda of the two foot-point conditions
+
+    a^2 u (b^2 + l)^2 + b^2 v (a^2 + l)^2 = (a^2 + l)^2 (b^2 + l)^2    (the foot point on the ellipse)
+    l^2 (u (b^2 + l)^2 + v (a^2 + l)^2) = R^2 (a^2 + l)^2 (b^2 + l)^2  (its distance is R)
+
+(the foot point of (x, y) is (a^2 x/(a^2 + l), b^2 y/(b^2 + l))), freed of
+its spurious factors. Its coefficients are below in lengths scaled by a
+(A = 1, B = b^2/a^2, r = R^2/a^2); a test checks that it vanishes on the
+parallel curve P(theta) - R n(theta) computed independently in mpmath. Inside
+the parallel curve the polynomial has no zero (a zero is a point at distance R
+from the ellipse along some normal, so within R of it), and it is positive at
+the centre, so its negative is the gap. The parallel curve is smooth and
+convex only while R < b^2/a (the smallest radius of curvature, at the ends of
+the major axis); a larger ball is refused.
+
+Arc length runs from (a, 0) counter-clockwise, through the eccentric angle
+theta = atan2(y/b, x/a) and the Fourier series of |P'(theta)|.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import ClassVar
+
+import mpmath
+import numpy as np
+
+from ....errors import SceneError
+from ..._numbers import workprec
+
+#: (i, j) of the coefficient of u^i v^j, in the order of ``offset_coefficients``.
+OFFSET_MONOMIALS = tuple((i, j) for i in range(5) for j in range(5 - i))
+
+
+def offset_coefficients(B, r, A=1):
+    """Coefficients q_ij of the parallel curve's polynomial sum q_ij u^i v^j (module docstring).
+
+    Derived with a computer-algebra resultant (sympy: resultant of the two
+    foot-point conditions in l, factored); checked against the parametric
+    parallel curve in tests/test_billiard_tables.py.
+    """
+    q = {
+        (0, 0): (r - A) ** 2 * (A - B) ** 2 * (r - B) ** 2,
+        (0, 1): -2 * (r - A) * (A - B) * (-A**2 * B - A**2 * r + 2 * A * B**2 + 2 * A * r**2 - B**2 * r - B * r**2),
+        (0, 2): (A**4 - 6 * A**3 * B - 6 * A**3 * r + 6 * A**2 * B**2 + 10 * A**2 * B * r + 6 * A**2 * r**2
+                 - 6 * A * B**2 * r - 6 * A * B * r**2 + B**2 * r**2),
+        (0, 3): -2 * A * (-A**2 + 2 * A * B + 2 * A * r - B * r),
+        (0, 4): A**2,
+        (1, 0): -2 * (A - B) * (r - B) * (-2 * A**2 * B + A**2 * r + A * B**2 + A * r**2 + B**2 * r - 2 * B * r**2),
+        (1, 1): 2 * (3 * A**3 * B + 2 * A**3 * r - 5 * A**2 * B**2 - 3 * A**2 * B * r + 3 * A**2 * r**2
+                     + 3 * A * B**3 - 3 * A * B**2 * r - 5 * A * B * r**2 + 2 * B**3 * r + 3 * B**2 * r**2),
+        (1, 2): -2 * (A**3 - A**2 * B + 3 * A**2 * r + 3 * A * B**2 - A * B * r + B**2 * r),
+        (1, 3): 2 * A * (A + B),
+        (2, 0): (6 * A**2 * B**2 - 6 * A**2 * B * r + A**2 * r**2 - 6 * A * B**3 + 10 * A * B**2 * r
+                 - 6 * A * B * r**2 + B**4 - 6 * B**3 * r + 6 * B**2 * r**2),
+        (2, 1): -2 * (3 * A**2 * B + A**2 * r - A * B**2 - A * B * r + B**3 + 3 * B**2 * r),
+        (2, 2): A**2 + 4 * A * B + B**2,
+        (3, 0): 2 * B * (-2 * A * B + A * r + B**2 - 2 * B * r),
+        (3, 1): 2 * B * (A + B),
+        (4, 0): B**2,
+    }
+    return tuple(q[m] for m in OFFSET_MONOMIALS)
+
+
+def offset_polynomial(u, v, q):
+    """sum q_ij u^i v^j by Horner's rule in v, then u."""
+    total = None
+    k = len(OFFSET_MONOMIALS)
+    for i in range(4, -1, -1):
+        row = None
+        for j in range(4 - i, -1, -1):
+            c = q[OFFSET_MONOMIALS.index((i, j))]
+            row = c if row is None else row * v + c
+        total = row if total is None else total * u + row
+    del k
+    return total
+
+
+def _offset_partials(u, v, q):
+    """(dQ/du, dQ/dv)."""
+    du = dv = 0
+    for (i, j), c in zip(OFFSET_MONOMIALS, q):
+        if i:
+            du = du + i * c * u ** (i - 1) * v**j
+        if j:
+            dv = dv + j * c * u**i * v ** (j - 1)
+    return du, dv
+
+
+@dataclass(frozen=True)
+class EllipseBoundary:
+    a: mpmath.mpf
+    b: mpmath.mpf
+
+    kind: ClassVar[str] = "ellipse"
+
+    def check_ball(self, radius, field: str) -> None:
+        with workprec():
+            limit = min(self.a, self.b) ** 2 / max(self.a, self.b)
+        if radius >= limit:
+            raise SceneError(field, f"a ball of radius {mpmath.nstr(radius, 6)} needs R < b^2/a = "
+                                    f"{mpmath.nstr(limit, 8)} on this ellipse (beyond it the curve of its centre has "
+                                    "cusps: it would touch the cushion at two points)")
+
+    def n_walls(self) -> int:
+        return 1
+
+    def conic(self, radius) -> bool:
+        """The centre's curve is a conic: for a particle, or on a circle (a = b)."""
+        return radius == 0 or self.a == self.b
+
+    def wall_constants(self, radius) -> tuple:
+        with workprec():
+            if self.conic(radius):
+                return ((1 / (self.a - radius) ** 2, 1 / (self.b - radius) ** 2),)
+            A, B, r = 1, (self.b / self.a) ** 2, (radius / self.a) ** 2
+            q = offset_coefficients(B, r, A)
+            scale = max(abs(c) for c in q)
+            return ((1 / self.a**2,) + tuple(-c / scale for c in q),)
+
+    def gap(self, wall, x, y, c):
+        if len(c) == 2:
+            return c[0] * x * x + c[1] * y * y - 1
+        return offset_polynomial(c[0] * x * x, c[0] * y * y, c[1:])
+
+    def gradient(self, wall, x, y, c):
+        if len(c) == 2:
+            return 2 * c[0] * x, 2 * c[1] * y
+        du, dv = _offset_partials(c[0] * x * x, c[0] * y * y, c[1:])
+        return 2 * c[0] * x * du, 2 * c[0] * y * dv
+
+    @cached_property
+    def _speed_series(self):
+        """Fourier cosine coefficients f_k of |P'(theta)| = sqrt(a^2 sin^2 + b^2 cos^2) (period pi)."""
+        a, b = float(self.a), float(self.b)
+        m = 1024
+        while True:
+            t = np.arange(m) * (np.pi / m)
+            f = np.sqrt((a * np.sin(t)) ** 2 + (b * np.cos(t)) ** 2)
+            coef = np.fft.rfft(f).real / m
+            coef[1:] *= 2
+            if abs(coef[m // 4]) < 1e-18 * coef[0] or m >= 2**22:
+                return coef[: m // 4]
+            m *= 4
+
+    def perimeter(self) -> float:
+        return float(2 * np.pi * self._speed_series[0])
+
+    def eccentric_angle(self, px, py):
+        return np.mod(np.arctan2(np.asarray(py, float) / float(self.b), np.asarray(px, float) / float(self.a)),
+                      2 * np.pi)
+
+    def arc_length(self, px, py):
+        theta = self.eccentric_angle(px, py)
+        f = self._speed_series
+        k = np.arange(1, len(f))
+        s = f[0] * theta
+        s = s + np.sum(f[1:, None] * np.sin(2 * np.outer(k, np.ravel(theta))) / (2 * k[:, None]), axis=0).reshape(
+            np.shape(theta))
+        return s
+
+    def outline(self, n: int = 400):
+        t = np.linspace(0, 2 * np.pi, n)
+        return float(self.a) * np.cos(t), float(self.b) * np.sin(t)
+
+    def describe(self) -> str:
+        return f"elliptical table a={mpmath.nstr(self.a, 6)} b={mpmath.nstr(self.b, 6)}"

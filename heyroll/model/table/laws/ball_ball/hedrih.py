@@ -1,0 +1,42 @@
+"""The rolling-collision law of Hedrih in vector form (paper sections 3.7 and 7.2.1, issue 14).
+
+Along the line of centres n the balls collide as two rolling bodies: the
+sum J_P1 omega_P1 + J_P2 omega_P2 of the normal rolling rates omega = v.n/R is
+conserved (eq. 8) and their difference is reversed and scaled by k
+(eqs. 9-11); the tangential parts of v and of omega_P are kept, and both
+balls roll on (omega_P = z x v / R before and after). The energy lost is
+eq. (15) on the normal rates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import mpmath
+
+from ....laws import HedrihRollingLaw, impulse_map
+from ....laws.base import check_restitution
+
+
+@dataclass(frozen=True)
+class HedrihTableLaw:
+    name: ClassVar[str] = "hedrih"
+    source: ClassVar[str] = "Hedrih's rolling-collision law (eqs. 8-15) on the normal rolling rates v.n/R"
+    keeps_rolling: ClassVar[bool] = True
+    restitution: mpmath.mpf = field(default_factory=lambda: mpmath.mpf(1))
+
+    def __post_init__(self):
+        object.__setattr__(self, "restitution", check_restitution(self.restitution))
+
+    def one_dimensional(self):
+        return HedrihRollingLaw(restitution=self.restitution)
+
+    def constants(self, body_i, body_j, number) -> tuple:
+        m = impulse_map(self.one_dimensional(), body_i, body_j, 1, 1)
+        return number(m.q), number(m.a_i), number(m.a_j)
+
+    def normal_rates(self, c, vn_i, vn_j):
+        # eqs. (10)-(11) on omega = vn/R, written on vn (see heyroll.model.laws.base.ImpulseMap)
+        d = vn_i - c[0] * vn_j
+        return vn_i - c[1] * d, vn_j + c[2] * d

@@ -1,0 +1,72 @@
+"""What a table collision law is: incoming centre velocities v and slips u -> outgoing ones.
+
+A ball on the cloth has centre velocity v and horizontal spin omega; the
+slip of its contact point with the cloth is u = v - R omega x z (z up), so
+a rolling ball has u = 0 and omega_P = z x v / R (issue 14). Laws act along
+the unit normal n of the contact (from ball i to ball j, or out of the
+table at a cushion): normal parts change, tangential parts are kept. A law
+that keeps the ball rolling through the impact changes v and omega together
+(u unchanged); a law whose impulse goes through the centre leaves omega
+alone, so the slip takes the whole velocity change and the ball then slides.
+
+Laws are evaluated in the run's own number type with constants rounded once
+(:meth:`constants`).
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar, Protocol, runtime_checkable
+
+
+@runtime_checkable
+class BallLaw(Protocol):
+    """Ball-ball collision law (``[collision] law``)."""
+
+    name: ClassVar[str]
+    source: ClassVar[str]
+    #: the balls keep rolling through the impact (u unchanged); otherwise the spin is unchanged
+    keeps_rolling: ClassVar[bool]
+
+    def constants(self, body_i, body_j, number) -> tuple:
+        """The pair's constants in the run type (``number`` rounds an mpmath value)."""
+        ...
+
+    def normal_rates(self, c: tuple, vn_i, vn_j) -> tuple:
+        """Outgoing normal velocities (vn_i+, vn_j+) from incoming ones (n from i to j)."""
+        ...
+
+
+@runtime_checkable
+class CushionLaw(Protocol):
+    """Ball-cushion impact law (``[track] cushion_model``)."""
+
+    name: ClassVar[str]
+    source: ClassVar[str]
+    keeps_rolling: ClassVar[bool]
+
+
+def split(v, n):
+    """(v . n, v - (v . n) n)."""
+    vn = v[0] * n[0] + v[1] * n[1]
+    return vn, (v[0] - vn * n[0], v[1] - vn * n[1])
+
+
+def with_normal(v, n, vn_new):
+    """v with its normal part replaced by vn_new (tangential part kept)."""
+    vn = v[0] * n[0] + v[1] * n[1]
+    return v[0] + (vn_new - vn) * n[0], v[1] + (vn_new - vn) * n[1]
+
+
+def after_impact(v, u, n, vn_new, keeps_rolling: bool, particle: bool):
+    """(v+, u+) after the normal part of v becomes vn_new.
+
+    Rolling kept: the spin turns with v, the slip is unchanged (a rolling ball
+    stays rolling). Impulse through the centre: the spin is unchanged, so the
+    slip changes by the velocity change. A particle has no spin: u = 0.
+    """
+    v_new = with_normal(v, n, vn_new)
+    if particle:
+        return v_new, (v_new[0] * 0, v_new[1] * 0)
+    if keeps_rolling:
+        return v_new, u
+    return v_new, (u[0] + v_new[0] - v[0], u[1] + v_new[1] - v[1])

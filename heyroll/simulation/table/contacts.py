@@ -1,0 +1,96 @@
+"""Contacts of a table scene in the run's own numbers: distances, normals, who approaches.
+
+Detection is heyoka's (events); this module judges the state at an event:
+which other contacts touch at the same instant (to be resolved with the one
+that fired), and whether anything overlaps (a missed impact).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ...model.table import TableScene
+from ...model.table.boundaries import sqrt
+from ..precision import Precision
+from .system import STATE_PER_BALL, TableSystem
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A touching contact: ``kind`` wall | pair; ball ``i``; ``j`` the other ball (pair) or the wall;
+    ``normal`` from i to j (pair) or out of the table (wall); ``distance`` (< 0: overlap)."""
+
+    kind: str
+    i: int
+    j: int
+    normal: tuple
+    distance: object
+
+
+def ball_state(state, k) -> tuple:
+    """(x, y, vx, vy, ux, uy) of ball k."""
+    return tuple(state[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)])
+
+
+class ContactGeometry:
+    def __init__(self, scene: TableScene, system: TableSystem, precision: Precision):
+        self.scene, self.system = scene, system
+        self.boundary = scene.boundary
+        num = precision.number
+        size = max(abs(float(v)) for v in _extent(scene))
+        #: a contact "touches" within this distance: the event's root is exact to a few ulps; a
+        #: symmetric start brings several contacts to the same instant up to round-off
+        self.touch = num(2.0**12 * precision.epsilon * size)
+        #: beyond this a contact overlaps: an impact was missed
+        self.overlap = num(2.0**20 * precision.epsilon * size)
+        self.zero = num(0)
+
+    def wall(self, k, w, x, y) -> tuple:
+        """(distance, outward unit normal) of ball k's centre from wall w (first order: g/|grad g|)."""
+        _, c = self.system.walls[(k, w)]
+        g = self.boundary.gap(w, x, y, c)
+        gx, gy = self.boundary.gradient(w, x, y, c)
+        norm = sqrt(gx * gx + gy * gy)
+        return -g / norm, (gx / norm, gy / norm)
+
+    def pair(self, i, j, state) -> tuple:
+        """(distance, unit normal from i to j) of balls i < j."""
+        xi, yi = state[STATE_PER_BALL * i], state[STATE_PER_BALL * i + 1]
+        xj, yj = state[STATE_PER_BALL * j], state[STATE_PER_BALL * j + 1]
+        dx, dy = xj - xi, yj - yi
+        d = sqrt(dx * dx + dy * dy)
+        _, reach = self.system.pairs[(i, j)]
+        return d - reach, (dx / d, dy / d)
+
+    def contacts(self, state, within) -> list:
+        """Every contact closer than ``within`` (pairs first, in scene order, then walls by ball)."""
+        out = []
+        n = self.system.n_balls
+        for i in range(n):
+            for j in range(i + 1, n):
+                d, nrm = self.pair(i, j, state)
+                if d <= within:
+                    out.append(Contact("pair", i, j, nrm, d))
+        for (k, w) in self.system.walls:
+            d, nrm = self.wall(k, w, state[STATE_PER_BALL * k], state[STATE_PER_BALL * k + 1])
+            if d <= within:
+                out.append(Contact("wall", k, w, nrm, d))
+        return out
+
+    def approach(self, contact: Contact, state):
+        """Closing speed of a contact (> 0: approaching)."""
+        vi = state[STATE_PER_BALL * contact.i + 2], state[STATE_PER_BALL * contact.i + 3]
+        nx, ny = contact.normal
+        if contact.kind == "wall":
+            return vi[0] * nx + vi[1] * ny
+        vj = state[STATE_PER_BALL * contact.j + 2], state[STATE_PER_BALL * contact.j + 3]
+        return (vi[0] - vj[0]) * nx + (vi[1] - vj[1]) * ny
+
+
+def _extent(scene: TableScene):
+    b = scene.boundary
+    for name in ("a", "b", "radius", "width", "height"):
+        if hasattr(b, name):
+            yield getattr(b, name)
+    for vertex in getattr(b, "vertices", ()):
+        yield from vertex

@@ -1,0 +1,311 @@
+"""The run loop of a table scene: heyoka finds the events, the laws resolve them.
+
+Called by :func:`heyroll.simulation.driver.simulate` for a
+:class:`~heyroll.model.table.TableScene`: the same entry point, options
+(:class:`~heyroll.simulation.driver.RunOptions`), precision ladder, statuses,
+sinks, progress callback and Ctrl-C handling as every other track.
+"""
+
+from __future__ import annotations
+
+import time
+
+import heyoka as hy
+
+from ...model.table import TableScene
+from ...model.table.boundaries import sqrt
+from ..driver import DEFAULT_MAX_EVENTS, RunOptions
+from ..result import Status
+from .contacts import Contact, ContactGeometry
+from .resolve import SIMULTANEOUS, Resolver
+from .result import TableResult
+from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, SLIDING, STATE_PER_BALL, integrator,
+                     table_system)
+
+#: Steps per call of propagate_until (a call that does not advance the time means heyoka is stuck).
+STEP_CHUNK = 100_000
+#: Impacts at one instant before the run is declared stuck (an inelastic collapse).
+MAX_AT_ONE_INSTANT = 10_000
+#: Pieces of motion kept for figures.
+MAX_PATH_PIECES = 200_000
+
+
+def simulate_table(scene: TableScene, opts: RunOptions, sink=None, progress=None) -> TableResult:
+    started = time.perf_counter()
+    run = _Run(scene, opts, sink, progress)
+    try:
+        run.loop()
+    except KeyboardInterrupt:
+        run.stop(Status.INTERRUPTED, f"interrupted at t = {float(run.t):.17g} s after {run.count} impacts")
+    return run.finish(time.perf_counter() - started)
+
+
+class _Run:
+    def __init__(self, scene: TableScene, opts: RunOptions, sink, progress):
+        self.scene, self.sink, self.progress = scene, sink, progress
+        precision = self.precision = opts.precision
+        num = self.num = precision.number
+        self.t_end = num(scene.run.t_end if opts.t_end is None else opts.t_end)
+        self.limit = scene.run.max_collisions if opts.max_collisions is ... else opts.max_collisions
+        self.max_events = DEFAULT_MAX_EVENTS if opts.max_events is ... else opts.max_events
+        self.chunk_size = opts.chunk_size
+        options = dict(precision.integrator_options(), high_accuracy=opts.high_accuracy)
+        if opts.fast_math:
+            options["fast_math"] = True
+        if opts.tolerance is not None:
+            options["tol"] = num(opts.tolerance)
+        self.system = table_system(scene, precision)
+        self.geometry = ContactGeometry(scene, self.system, precision)
+        self.resolver = Resolver(scene, precision)
+        self.state = [num(v) for b in scene.balls for v in (b.x, b.y, b.vx, b.vy, b.ux, b.uy)]
+        self.state_initial = list(self.state)
+        self.pars = list(self.system.pars)
+        self.zero = num(0)
+        self.mass = [num(b.body.mass) for b in scene.balls]
+        self.spin_inertia = [num(b.body.kappa - 1) for b in scene.balls]
+        mu_g = scene.friction * scene.g
+        self.slide_v = [num(mu_g) for _ in scene.balls]
+        self.slide_u = [num(mu_g * b.body.kappa / (b.body.kappa - 1)) if b.body.kappa > 1 else num(0)
+                        for b in scene.balls]
+        self.radius = [num(b.body.radius) for b in scene.balls]
+        self.t = num(0)
+        self.count = self.cushion = self.rerolls = self.events = 0
+        self.records: list = []
+        self.kept: list | None = None  # with a sink: the first chunk, kept for the result
+        self.flushed = 0
+        self.paths: list = []
+        self.status, self.message = None, ""
+        self.energy_initial = float(self.energy(self.state))
+        self.options = options
+        self.ta = None
+        self._tick = time.perf_counter()
+        if sink is not None:
+            sink.open(scene, None, precision)
+        for k in range(scene.n_bodies):
+            self.set_mode(k)
+
+    # -- the loop ------------------------------------------------------------------------------
+    def loop(self) -> None:
+        if self.limit == 0:
+            self.stop(Status.MAX_COLLISIONS, "max_collisions = 0: nothing integrated")
+            return
+        self.ta = ta = integrator(self.scene, self.system, self.precision, self.options, self.state)
+        ta.pars[:] = self.pars
+        # contacts that touch and approach at the start (a ball launched into a touching neighbour)
+        self.at_instant(None)
+        if self.status is None:
+            self.push()
+        time_limit, step_limit = hy.taylor_outcome.time_limit, hy.taylor_outcome.step_limit
+        n_events = len(self.system.events)
+        while self.status is None:
+            before = ta.time
+            outcome = ta.propagate_until(self.t_end, max_steps=STEP_CHUNK)[0]
+            self.t = ta.time
+            if outcome == time_limit:
+                self.pull()
+                self.stop(Status.COMPLETED, "reached t_end")
+                break
+            if outcome == step_limit:
+                if ta.time == before:
+                    self.pull()
+                    self.stop(Status.FAILED, f"the integrator does not advance from t = {float(ta.time):.17g} s")
+                continue
+            index = -outcome.value - 1
+            if not 0 <= index < n_events:
+                self.pull()
+                self.stop(Status.FAILED, f"heyoka stopped with {outcome} at t = {float(ta.time):.17g} s")
+                break
+            self.pull()
+            event = self.system.events[index]
+            if event.kind == "roll":
+                self.reroll(event.ball)
+            else:
+                fired = self.fired_contact(event)
+                self.at_instant(fired)
+            if self.status is None:
+                self.push()
+            self.tick()
+
+    def pull(self) -> None:
+        self.state = self.ta.state.tolist() if self.precision.name == "double" else list(self.ta.state)
+
+    def push(self) -> None:
+        self.ta.state[:] = self.state
+        self.ta.pars[:] = self.pars
+        if len(self.paths) < MAX_PATH_PIECES:
+            self.paths.append((float(self.t), [float(v) for v in self.state], self._accelerations()))
+
+    def _accelerations(self) -> list:
+        out = []
+        for k in range(self.scene.n_bodies):
+            b = BALL_PARS * k
+            out += [float(self.pars[b + FVX]), float(self.pars[b + FVY])]
+        return out
+
+    def tick(self) -> None:
+        self.events += 1
+        if self.max_events is not None and self.events >= self.max_events and self.status is None:
+            self.stop(Status.MAX_EVENTS, f"stopped after max_events = {self.max_events} events")
+        if self.progress is not None and self.events % 256 == 0:
+            now = time.perf_counter()
+            if now - self._tick > 0.2:
+                self._tick = now
+                self.progress(float(self.t), self.count)
+
+    def stop(self, status: Status, message: str) -> None:
+        if self.status is None:
+            self.status, self.message = status, message
+
+    # -- modes ---------------------------------------------------------------------------------
+    def set_mode(self, k: int) -> None:
+        """Ball k's accelerations from its slip: sliding against d = u/|u| (module system), or none."""
+        b, s = BALL_PARS * k, STATE_PER_BALL * k
+        ux, uy = self.state[s + 4], self.state[s + 5]
+        zero = self.zero
+        if self.system.rolls[k] and (ux != zero or uy != zero):
+            norm = sqrt(ux * ux + uy * uy)
+            dx, dy = ux / norm, uy / norm
+            self.pars[b:b + BALL_PARS] = [-self.slide_v[k] * dx, -self.slide_v[k] * dy, -self.slide_u[k] * dx,
+                                          -self.slide_u[k] * dy, zero + 1, dx, dy]
+        else:
+            self.pars[b:b + BALL_PARS] = [zero] * BALL_PARS
+
+    def reroll(self, k: int) -> None:
+        """Ball k's slip reached zero: it rolls from now on."""
+        s = STATE_PER_BALL * k
+        self.state[s + 4] = self.state[s + 5] = self.zero
+        self.set_mode(k)
+        self.rerolls += 1
+
+    # -- impacts ---------------------------------------------------------------------------------
+    def fired_contact(self, event) -> Contact:
+        if event.kind == "wall":
+            s = STATE_PER_BALL * event.ball
+            d, normal = self.geometry.wall(event.ball, event.other, self.state[s], self.state[s + 1])
+            return Contact("wall", event.ball, event.other, normal, d)
+        d, normal = self.geometry.pair(event.ball, event.other, self.state)
+        return Contact("pair", event.ball, event.other, normal, d)
+
+    def at_instant(self, fired: Contact | None) -> None:
+        """Resolve the contact heyoka found and every other one touching and approaching at this instant."""
+        geometry = self.geometry
+        if self.scene.simultaneous == "impulses":
+            touching = geometry.contacts(self.state, geometry.touch)
+            if fired is not None and not any(_same(fired, c) for c in touching):
+                touching.append(fired)
+            if touching and any(geometry.approach(c, self.state) > self.zero for c in touching):
+                self.simultaneous(touching)
+        else:
+            if fired is not None:
+                self.resolve(fired)
+            for _ in range(MAX_AT_ONE_INSTANT):
+                if self.status is not None:
+                    return
+                waiting = [c for c in geometry.contacts(self.state, geometry.touch)
+                           if geometry.approach(c, self.state) > self.zero]
+                if not waiting:
+                    break
+                self.resolve(waiting[0])
+            else:
+                self.stop(Status.FAILED, f"more than {MAX_AT_ONE_INSTANT} impacts at t = {float(self.t):.17g} s "
+                                         "(an inelastic collapse): stopped")
+                return
+        overlapping = geometry.contacts(self.state, -geometry.overlap)
+        if overlapping and self.status is None:
+            c = overlapping[0]
+            what = f"balls {c.i + 1} and {c.j + 1}" if c.kind == "pair" else f"ball {c.i + 1} and the cushion"
+            self.stop(Status.OVERLAP, f"{what} overlap by {float(-c.distance):.3g} m at t = {float(self.t):.17g} s: "
+                                      "an impact was missed")
+
+    def resolve(self, contact: Contact) -> None:
+        before = list(self.state)
+        energy_before = self.energy(before)
+        if contact.kind == "wall":
+            flag = self.resolver.wall(self.state, contact.i, contact.normal)
+        else:
+            flag = self.resolver.pair(self.state, contact.i, contact.j, contact.normal)
+        for k in (contact.i,) if contact.kind == "wall" else (contact.i, contact.j):
+            self.set_mode(k)
+        self.record(contact, before, self.state, energy_before, self.energy(self.state), flag)
+
+    def simultaneous(self, contacts: list) -> None:
+        before = list(self.state)
+        energy_before = self.energy(before)
+        impulses = self.resolver.impulses(self.state, contacts, self.geometry.approach)
+        if impulses is None:
+            self.state = before
+            self.stop(Status.FAILED, f"no simultaneous impulses found for {len(contacts)} contacts at "
+                                     f"t = {float(self.t):.17g} s")
+            return
+        balls = {c.i for c in contacts} | {c.j for c in contacts if c.kind == "pair"}
+        for k in balls:
+            self.set_mode(k)
+        energy_after = self.energy(self.state)
+        for c, lam in zip(contacts, impulses):
+            if lam > self.zero:
+                self.record(c, before, self.state, energy_before, energy_after, SIMULTANEOUS)
+
+    def record(self, contact: Contact, before, after, energy_before, energy_after, flag) -> None:
+        i = contact.i
+        si = STATE_PER_BALL * i
+        row = [self.t, i + 1]
+        if contact.kind == "wall":
+            nan = float("nan")
+            nx, ny = contact.normal
+            r = self.radius[i]
+            row += [0, before[si], before[si + 1], before[si + 2], before[si + 3], after[si + 2], after[si + 3],
+                    nan, nan, nan, nan, nan, nan, energy_before, energy_after,
+                    before[si] + r * nx, before[si + 1] + r * ny, nx, ny, flag]
+            self.cushion += 1
+        else:
+            j = contact.j
+            sj = STATE_PER_BALL * j
+            nan = float("nan")
+            row += [j + 1, before[si], before[si + 1], before[si + 2], before[si + 3], after[si + 2], after[si + 3],
+                    before[sj], before[sj + 1], before[sj + 2], before[sj + 3], after[sj + 2], after[sj + 3],
+                    energy_before, energy_after, nan, nan, nan, nan, flag]
+        self.records.append(row)
+        self.count += 1
+        if self.sink is not None and len(self.records) >= self.chunk_size:
+            self.flush()
+        if self.limit is not None and self.count >= self.limit:
+            self.stop(Status.MAX_COLLISIONS, f"stopped after max_collisions = {self.limit} impacts")
+
+    def flush(self) -> None:
+        if self.sink is None or not self.records:
+            return
+        self.sink.write(self.records, self.flushed + 1)
+        self.flushed += len(self.records)
+        if self.kept is None:
+            self.kept = self.records
+        self.records = []
+
+    def energy(self, state):
+        total = self.zero
+        for k in range(self.scene.n_bodies):
+            s = STATE_PER_BALL * k
+            vx, vy, ux, uy = state[s + 2:s + 6]
+            wx, wy = vx - ux, vy - uy
+            total = total + self.mass[k] * (vx * vx + vy * vy + self.spin_inertia[k] * (wx * wx + wy * wy)) / 2
+        return total
+
+    def finish(self, wall: float) -> TableResult:
+        if self.status is None:
+            self.stop(Status.INTERRUPTED, "interrupted before the run began")
+        if self.sink is not None:
+            self.flush()
+            self.sink.close()
+        if self.progress is not None:
+            self.progress(float(self.t), self.count)
+        records = self.kept if self.kept is not None else self.records
+        return TableResult(
+            scene=self.scene, status=self.status, message=self.message, precision=self.precision, t_final=self.t,
+            state_initial=self.state_initial, state_final=list(self.state), energy_initial=self.energy_initial,
+            energy_final=float(self.energy(self.state)), n_collisions=self.count, n_cushion=self.cushion,
+            n_rerolls=self.rerolls, records=records, paths=self.paths, wall_time_s=wall,
+            settings={"precision": self.precision.name, "t_end": float(self.t_end), "max_collisions": self.limit},
+        )
+
+
+def _same(a: Contact, b: Contact) -> bool:
+    return a.kind == b.kind and a.i == b.i and a.j == b.j

@@ -1,0 +1,186 @@
+"""Impacts on the table resolved by the scene's laws, in the run's own numbers.
+
+Detection (heyoka's events, :mod:`.contacts`) is kept apart from resolution
+(here): a ball-cushion impact goes to the cushion model, a ball-ball impact
+to the ball law (strategies in ``heyroll.model.table.laws``), and contacts
+that touch at the same instant to the scene's simultaneity policy:
+
+* ``sequential``: pairwise, in a stated order: the contact heyoka found
+  first, then every other touching contact that still approaches, ball pairs
+  in scene order before cushions (by ball), again and again until none
+  approaches (a Newton's cradle passes the impulse along the row).
+* ``impulses``: all touching contacts at once: normal impulses L >= 0 with
+  Newton's restitution on every contact's separation speed,
+  sigma+ >= -k sigma- where sigma- < 0 (>= 0 where it was separating),
+  complementary to L (a linear complementarity problem, solved exactly by
+  its active set).
+"""
+
+from __future__ import annotations
+
+from itertools import combinations
+
+from ...model.table import TableScene
+from ...model.table.laws import after_impact
+from ...model.table.laws.ball_ball.newton import NewtonTableLaw
+from ..precision import Precision
+from .contacts import Contact
+from .system import STATE_PER_BALL
+
+#: law_flag: 0 the scene's law, 1 Newton's law where the scene's would leave the balls approaching
+#: (Hedrih's law on unequal radii), 2 a simultaneous-impulse resolution.
+SCENE_LAW, FALLBACK_LAW, SIMULTANEOUS = 0, 1, 2
+#: Contacts resolved together by 'impulses' at most (the active set is searched over their subsets).
+MAX_SIMULTANEOUS = 12
+
+
+class Resolver:
+    def __init__(self, scene: TableScene, precision: Precision):
+        num = precision.number
+        self.scene = scene
+        self.zero = num(0)
+        self.particle = [b.body.is_particle for b in scene.balls]
+        n = scene.n_bodies
+        self.pair_constants, self.fallback = {}, {}
+        self.newton = newton = NewtonTableLaw(restitution=scene.law.restitution)
+        for i in range(n):
+            for j in range(i + 1, n):
+                bi, bj = scene.balls[i].body, scene.balls[j].body
+                if scene.law.name == "hedrih" and (bi.is_particle or bj.is_particle):
+                    self.pair_constants[(i, j)] = None
+                else:
+                    self.pair_constants[(i, j)] = scene.law.constants(bi, bj, num)
+                self.fallback[(i, j)] = newton.constants(bi, bj, num)
+        self.k_cushion = num(scene.cushion.restitution)
+        self.k_law = num(scene.law.restitution)
+        one_d = getattr(scene.law, "one_dimensional", None)
+        self.mobility = []  # 1/mu_b: velocity change per unit law impulse along a normal
+        for ball in scene.balls:
+            if one_d is None or ball.body.is_particle:
+                self.mobility.append(1 / num(ball.body.mass))
+            else:
+                v = one_d().variables(ball.body, 1)
+                self.mobility.append(1 / num(v.inertia * v.scale))
+
+    # -- one contact -------------------------------------------------------------------------
+    def wall(self, state: list, k: int, normal) -> int:
+        """Ball k hits a cushion with outward normal ``normal``: state updated in place."""
+        x, y, vx, vy, ux, uy = state[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
+        vn = vx * normal[0] + vy * normal[1]
+        v, u = after_impact((vx, vy), (ux, uy), normal, -self.k_cushion * vn, self.scene.cushion.keeps_rolling,
+                            self.particle[k])
+        state[STATE_PER_BALL * k + 2:STATE_PER_BALL * (k + 1)] = [v[0], v[1], u[0], u[1]]
+        return SCENE_LAW
+
+    def pair(self, state: list, i: int, j: int, normal) -> int:
+        """Balls i < j collide along ``normal`` (from i to j): state updated in place."""
+        law = self.scene.law
+        vi = state[STATE_PER_BALL * i + 2], state[STATE_PER_BALL * i + 3]
+        vj = state[STATE_PER_BALL * j + 2], state[STATE_PER_BALL * j + 3]
+        vn_i = vi[0] * normal[0] + vi[1] * normal[1]
+        vn_j = vj[0] * normal[0] + vj[1] * normal[1]
+        flag, keeps = SCENE_LAW, law.keeps_rolling
+        c = self.pair_constants[(i, j)]
+        if c is None:
+            flag, c = FALLBACK_LAW, self.fallback[(i, j)]
+            new_i, new_j = self.newton.normal_rates(c, vn_i, vn_j)
+        else:
+            new_i, new_j = law.normal_rates(c, vn_i, vn_j)
+            if new_i - new_j > self.zero and vn_i - vn_j > self.zero:
+                # the law leaves them approaching (Hedrih's law on unequal radii): Newton's law instead
+                flag = FALLBACK_LAW
+                new_i, new_j = self.newton.normal_rates(self.fallback[(i, j)], vn_i, vn_j)
+        for k, new in ((i, new_i), (j, new_j)):
+            b = STATE_PER_BALL * k
+            v, u = after_impact((state[b + 2], state[b + 3]), (state[b + 4], state[b + 5]), normal, new, keeps,
+                                self.particle[k])
+            state[b + 2:b + 6] = [v[0], v[1], u[0], u[1]]
+        return flag
+
+    # -- simultaneous impulses ---------------------------------------------------------------
+    def impulses(self, state: list, contacts: list[Contact], approach) -> list:
+        """Resolve ``contacts`` at once (module docstring); returns the impulses L (run type)."""
+        m = len(contacts)
+        # J_cb: the direction in which contact c's impulse pushes ball b
+        pushes = []
+        for c in contacts:
+            nx, ny = c.normal
+            if c.kind == "wall":
+                pushes.append({c.i: (-nx, -ny)})
+            else:
+                pushes.append({c.i: (-nx, -ny), c.j: (nx, ny)})
+        a = [[self.zero] * m for _ in range(m)]
+        for p in range(m):
+            for q in range(m):
+                total = self.zero
+                for b, (jx, jy) in pushes[p].items():
+                    if b in pushes[q]:
+                        kx, ky = pushes[q][b]
+                        total = total + (jx * kx + jy * ky) * self.mobility[b]
+                a[p][q] = total
+        rhs = []
+        for c in contacts:
+            sigma = -approach(c, state)
+            k = self.k_cushion if c.kind == "wall" else self.k_law
+            rhs.append(sigma + k * sigma if sigma < self.zero else sigma)
+        impulses = _complementarity(a, rhs, self.zero)
+        if impulses is None:
+            return None
+        for c, push, lam in zip(contacts, pushes, impulses):
+            if not lam > self.zero:
+                continue
+            keeps = self.scene.cushion.keeps_rolling if c.kind == "wall" else self.scene.law.keeps_rolling
+            for b, (jx, jy) in push.items():
+                base = STATE_PER_BALL * b
+                dvx, dvy = lam * jx * self.mobility[b], lam * jy * self.mobility[b]
+                state[base + 2] = state[base + 2] + dvx
+                state[base + 3] = state[base + 3] + dvy
+                if self.particle[b]:
+                    state[base + 4] = state[base + 5] = self.zero
+                elif not keeps:
+                    state[base + 4] = state[base + 4] + dvx
+                    state[base + 5] = state[base + 5] + dvy
+        return impulses
+
+
+def _complementarity(a, b, zero):
+    """L >= 0 with w = A L + b >= 0 and L . w = 0, by trying active sets, smallest first (A symmetric PSD)."""
+    m = len(b)
+    if all(x >= zero for x in b):
+        return [zero] * m
+    slack = max(abs(x) for x in b) * 1e-12 if m else zero
+    for size in range(1, m + 1):
+        for subset in combinations(range(m), size):
+            lam_s = _solve([[a[p][q] for q in subset] for p in subset], [-b[p] for p in subset])
+            if lam_s is None or any(x < -slack for x in lam_s):
+                continue
+            lam = [zero] * m
+            for p, x in zip(subset, lam_s):
+                lam[p] = x if x > zero else zero
+            w = [sum((a[p][q] * lam[q] for q in range(m)), zero) + b[p] for p in range(m)]
+            if all(w[p] >= -slack for p in range(m) if p not in subset):
+                return lam
+    return None
+
+
+def _solve(matrix, rhs):
+    """Gaussian elimination with partial pivoting in the entries' own type; None if singular."""
+    n = len(rhs)
+    m = [row[:] + [r] for row, r in zip(matrix, rhs)]
+    scale = max((abs(x) for row in matrix for x in row), default=0)
+    for col in range(n):
+        pivot = max(range(col, n), key=lambda r: abs(m[r][col]))
+        if not abs(m[pivot][col]) > scale * 1e-12:
+            return None
+        m[col], m[pivot] = m[pivot], m[col]
+        for r in range(col + 1, n):
+            f = m[r][col] / m[col][col]
+            for c in range(col, n + 1):
+                m[r][c] = m[r][c] - f * m[col][c]
+    x = [None] * n
+    for r in range(n - 1, -1, -1):
+        total = m[r][n]
+        for c in range(r + 1, n):
+            total = total - m[r][c] * x[c]
+        x[r] = total / m[r][r]
+    return x

@@ -1,0 +1,153 @@
+"""The table's equations of motion and event functions, compiled once per scene shape.
+
+State per ball (6 numbers): centre x, y; centre velocity vx, vy; slip
+ux, uy of the contact point with the cloth (u = v - R omega x z). Between
+impacts every ball moves with a constant acceleration (issue 14, "between
+impacts the motion is polynomial in t"):
+
+* rolling (u = 0): none, a straight line at constant speed (no rolling
+  resistance);
+* sliding: Coulomb friction mu m g against the slip direction d, constant
+  while the ball slides: v' = -mu g d and, from the friction's moment about
+  the centre, omega' such that u' = -mu g kappa/(kappa - 1) d: the centre
+  moves on a parabola and u shrinks along d to zero, where the ball rolls
+  again (the "roll" event u . d = 0). A particle never slides.
+
+The accelerations, the slip direction and a sliding flag are runtime
+parameters per ball, switched by the driver at events; the wall constants
+(table geometry and ball radius) and the pairs' reach are parameters too,
+so one compiled integrator serves every scene of the same shape.
+
+Events (terminal; the driver resolves them): one per ball and wall (the
+boundary's gap polynomial crossing 0 upwards), one per pair of balls
+(|c_i - c_j|^2 - (R_i + R_j)^2 crossing 0 downwards), one per ball that can
+slide (u . d + (1 - s), the constant 1 while it rolls).
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+
+import heyoka as hy
+
+from ...model.table import TableScene
+from ..compiled_cache import CompiledCache
+from ..precision import Precision
+
+#: Parameters per ball: accelerations of v and of u, sliding flag s, slip direction d.
+FVX, FVY, FUX, FUY, SLIDING, DX, DY = range(7)
+BALL_PARS = 7
+STATE_PER_BALL = 6
+
+_INTEGRATORS = CompiledCache(16)
+
+
+@dataclass(frozen=True)
+class TableEvent:
+    """What an event index means: ``kind`` wall | pair | roll; ``ball`` (0-based); ``other`` wall or ball."""
+
+    kind: str
+    ball: int
+    other: int = -1
+
+
+@dataclass(frozen=True)
+class TableSystem:
+    """The compiled layout of a table scene: events, parameter slots, run-type constants."""
+
+    events: tuple
+    #: (ball, wall) -> (first parameter index, constants in the run type)
+    walls: dict
+    #: (i, j) -> (parameter index of (R_i + R_j)^2, R_i + R_j in the run type)
+    pairs: dict
+    pars: tuple
+    rolls: tuple
+    shape: tuple
+
+    @property
+    def n_balls(self) -> int:
+        return len(self.rolls)
+
+
+def can_slide(scene: TableScene, k: int) -> bool:
+    return scene.slides and scene.friction > 0 and not scene.balls[k].body.is_particle
+
+
+def table_system(scene: TableScene, precision: Precision) -> TableSystem:
+    num = precision.number
+    n = scene.n_bodies
+    pars: list = []
+    for ball in scene.balls:
+        pars += [num(0)] * BALL_PARS
+    walls = {}
+    lengths = []
+    for k, ball in enumerate(scene.balls):
+        for w, consts in enumerate(scene.boundary.wall_constants(ball.body.radius)):
+            values = tuple(num(c) for c in consts)
+            walls[(k, w)] = (len(pars), values)
+            pars += values
+            lengths.append(len(values))
+    pairs = {}
+    for i in range(n):
+        for j in range(i + 1, n):
+            reach = scene.balls[i].body.radius + scene.balls[j].body.radius
+            pairs[(i, j)] = (len(pars), num(reach))
+            pars.append(num(reach * reach))
+    events = [TableEvent("wall", k, w) for (k, w) in walls]
+    events += [TableEvent("pair", i, j) for (i, j) in pairs]
+    rolls = tuple(can_slide(scene, k) for k in range(n))
+    events += [TableEvent("roll", k) for k in range(n) if rolls[k]]
+    shape = (scene.boundary.kind, n, tuple(lengths), rolls)
+    return TableSystem(events=tuple(events), walls=walls, pairs=pairs, pars=tuple(pars), rolls=rolls, shape=shape)
+
+
+def integrator(scene: TableScene, system: TableSystem, precision: Precision, options: dict, state):
+    """A fresh heyoka integrator for ``system`` (a copy of the one compiled for its shape)."""
+    key = (system.shape, precision.name, tuple(sorted((k, str(v)) for k, v in options.items())))
+
+    def build():
+        return _compile(scene, system, options, state)
+
+    ta = copy.deepcopy(_INTEGRATORS.get(key, build))
+    ta.time = precision.number(0)
+    ta.state[:] = state
+    ta.pars[:] = list(system.pars)
+    return ta
+
+
+def _compile(scene: TableScene, system: TableSystem, options: dict, state):
+    n = system.n_balls
+    names = []
+    for k in range(n):
+        names += [f"x_{k}", f"y_{k}", f"vx_{k}", f"vy_{k}", f"ux_{k}", f"uy_{k}"]
+    var = hy.make_vars(*names)
+    if n * STATE_PER_BALL == 1:  # pragma: no cover (make_vars returns a bare variable for one name)
+        var = [var]
+    par = hy.par
+    equations = []
+    for k in range(n):
+        x, y, vx, vy, ux, uy = var[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
+        base = BALL_PARS * k
+        equations += [(x, vx), (y, vy), (vx, par[base + FVX]), (vy, par[base + FVY]),
+                      (ux, par[base + FUX]), (uy, par[base + FUY])]
+    positive, negative = hy.event_direction.positive, hy.event_direction.negative
+    events = []
+    for ev in system.events:
+        k = ev.ball
+        x, y = var[STATE_PER_BALL * k], var[STATE_PER_BALL * k + 1]
+        if ev.kind == "wall":
+            first, values = system.walls[(k, ev.other)]
+            c = [par[first + m] for m in range(len(values))]
+            events.append(hy.t_event(scene.boundary.gap(ev.other, x, y, c), direction=positive))
+        elif ev.kind == "pair":
+            xj, yj = var[STATE_PER_BALL * ev.other], var[STATE_PER_BALL * ev.other + 1]
+            index, _ = system.pairs[(k, ev.other)]
+            dx, dy = x - xj, y - yj
+            events.append(hy.t_event(dx * dx + dy * dy - par[index], direction=negative))
+        else:
+            ux, uy = var[STATE_PER_BALL * k + 4], var[STATE_PER_BALL * k + 5]
+            base = BALL_PARS * k
+            events.append(hy.t_event(ux * par[base + DX] + uy * par[base + DY] + (1. - par[base + SLIDING]),
+                                     direction=negative))
+    return hy.taylor_adaptive(equations, list(state), pars=list(system.pars), t_events=events, **options)
