@@ -44,6 +44,12 @@ class ContactGeometry:
         #: beyond this a contact overlaps: an impact was missed
         self.overlap = num(2.0**20 * precision.epsilon * size)
         self.zero = num(0)
+        #: balls whose cushion impacts are polished with the boundary's exact distance (ellipse, R > 0)
+        self.exact = {}
+        if hasattr(self.boundary, "exact_distance"):
+            for k, ball in enumerate(scene.balls):
+                if not self.boundary.conic(ball.body.radius):
+                    self.exact[k] = (num(self.boundary.a ** 2), num(self.boundary.b ** 2), num(ball.body.radius))
 
     def wall(self, k, w, x, y) -> tuple:
         """(distance, outward unit normal) of ball k's centre from wall w (first order: g/|grad g|)."""
@@ -51,7 +57,18 @@ class ContactGeometry:
         g = self.boundary.gap(w, x, y, c)
         gx, gy = self.boundary.gradient(w, x, y, c)
         norm = sqrt(gx * gx + gy * gy)
+        if not norm > self.zero:  # the centre of a circular table: as far from the cushion as can be
+            return -g, (self.zero, self.zero)
         return -g / norm, (gx / norm, gy / norm)
+
+    def exact_wall(self, k, x, y):
+        """(distance from the cushion minus R, outward unit normal) of ball k by the exact distance, or None."""
+        a2, b2, r = self.exact[k]
+        found = self.boundary.exact_distance(x, y, a2, b2, self.zero)
+        if found is None:
+            return None
+        d, normal = found
+        return d - r, normal
 
     def pair(self, i, j, state) -> tuple:
         """(distance, unit normal from i to j) of balls i < j."""

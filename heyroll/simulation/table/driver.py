@@ -68,6 +68,9 @@ class _Run:
         self.slide_u = [num(mu_g * b.body.kappa / (b.body.kappa - 1)) if b.body.kappa > 1 else num(0)
                         for b in scene.balls]
         self.radius = [num(b.body.radius) for b in scene.balls]
+        #: a slip within this fraction of its starting size has ended (re-roll events at one instant)
+        self.slip_tolerance = num(2.0**10 * precision.epsilon)
+        self.slip_scale = [num(0) for _ in scene.balls]
         self.t = num(0)
         self.count = self.cushion = self.rerolls = self.events = 0
         self.records: list = []
@@ -130,6 +133,7 @@ class _Run:
         self.state = self.ta.state.tolist() if self.precision.name == "double" else list(self.ta.state)
 
     def push(self) -> None:
+        self.ta.time = self.t
         self.ta.state[:] = self.state
         self.ta.pars[:] = self.pars
         if len(self.paths) < MAX_PATH_PIECES:
@@ -167,24 +171,72 @@ class _Run:
             dx, dy = ux / norm, uy / norm
             self.pars[b:b + BALL_PARS] = [-self.slide_v[k] * dx, -self.slide_v[k] * dy, -self.slide_u[k] * dx,
                                           -self.slide_u[k] * dy, zero + 1, dx, dy]
+            self.slip_scale[k] = norm
         else:
             self.pars[b:b + BALL_PARS] = [zero] * BALL_PARS
 
     def reroll(self, k: int) -> None:
-        """Ball k's slip reached zero: it rolls from now on."""
+        """Ball k's slip reached zero: it rolls from now on; so does every ball whose slip ends now too
+        (heyoka does not see a root at the very start of its next step)."""
         s = STATE_PER_BALL * k
         self.state[s + 4] = self.state[s + 5] = self.zero
         self.set_mode(k)
         self.rerolls += 1
+        for other in range(self.scene.n_bodies):
+            b, s = BALL_PARS * other, STATE_PER_BALL * other
+            if other == k or self.pars[b + SLIDING] == self.zero:
+                continue
+            along = self.state[s + 4] * self.pars[b + DX] + self.state[s + 5] * self.pars[b + DY]
+            if along <= self.slip_tolerance * self.slip_scale[other]:
+                self.state[s + 4] = self.state[s + 5] = self.zero
+                self.set_mode(other)
+                self.rerolls += 1
 
     # -- impacts ---------------------------------------------------------------------------------
     def fired_contact(self, event) -> Contact:
         if event.kind == "wall":
-            s = STATE_PER_BALL * event.ball
-            d, normal = self.geometry.wall(event.ball, event.other, self.state[s], self.state[s + 1])
-            return Contact("wall", event.ball, event.other, normal, d)
+            k = event.ball
+            s = STATE_PER_BALL * k
+            if k in self.geometry.exact:
+                polished = self.polish(k)
+                if polished is not None:
+                    return Contact("wall", k, event.other, polished[1], polished[0])
+            d, normal = self.geometry.wall(k, event.other, self.state[s], self.state[s + 1])
+            return Contact("wall", k, event.other, normal, d)
         d, normal = self.geometry.pair(event.ball, event.other, self.state)
         return Contact("pair", event.ball, event.other, normal, d)
+
+    def polish(self, k: int):
+        """Move the instant of ball k's cushion impact onto the root of its exact distance (Newton's method
+        in time: every ball's motion is a known quadratic). The gap polynomial of a small ball in an
+        ellipse is ill conditioned near its root (contacts.ContactGeometry.exact); heyoka's root of it
+        is off by up to ~1e-12 relative for R = a/200, this brings it back to round-off."""
+        s = STATE_PER_BALL * k
+        found = None
+        for _ in range(3):
+            found = self.geometry.exact_wall(k, self.state[s], self.state[s + 1])
+            if found is None:
+                return None
+            excess, (nx, ny) = found  # distance from the cushion minus R: 0 at contact
+            speed = self.state[s + 2] * nx + self.state[s + 3] * ny
+            if not speed > self.zero:
+                return found
+            dt = excess / speed  # the distance falls at the approach speed
+            if dt == self.zero:
+                break
+            self.advance(dt)
+        return found
+
+    def advance(self, dt) -> None:
+        """Every ball along its constant-acceleration motion by dt (tiny: a polished impact instant)."""
+        half = dt * dt / 2
+        for k in range(self.scene.n_bodies):
+            s, b = STATE_PER_BALL * k, BALL_PARS * k
+            x, y, vx, vy, ux, uy = self.state[s:s + 6]
+            fvx, fvy, fux, fuy = self.pars[b + FVX], self.pars[b + FVY], self.pars[b + FUX], self.pars[b + FUY]
+            self.state[s:s + 6] = [x + vx * dt + fvx * half, y + vy * dt + fvy * half, vx + fvx * dt, vy + fvy * dt,
+                                   ux + fux * dt, uy + fuy * dt]
+        self.t = self.t + dt
 
     def at_instant(self, fired: Contact | None) -> None:
         """Resolve the contact heyoka found and every other one touching and approaching at this instant."""

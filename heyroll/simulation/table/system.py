@@ -132,6 +132,7 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
         equations += [(x, vx), (y, vy), (vx, par[base + FVX]), (vy, par[base + FVY]),
                       (ux, par[base + FUX]), (uy, par[base + FUY])]
     positive, negative = hy.event_direction.positive, hy.event_direction.negative
+    typed = {"fp_type": options["fp_type"]} if "fp_type" in options else {}
     events = []
     for ev in system.events:
         k = ev.ball
@@ -139,15 +140,15 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
         if ev.kind == "wall":
             first, values = system.walls[(k, ev.other)]
             c = [par[first + m] for m in range(len(values))]
-            events.append(hy.t_event(scene.boundary.gap(ev.other, x, y, c), direction=positive))
+            events.append(hy.t_event(scene.boundary.gap(ev.other, x, y, c), direction=positive, **typed))
         elif ev.kind == "pair":
             xj, yj = var[STATE_PER_BALL * ev.other], var[STATE_PER_BALL * ev.other + 1]
             index, _ = system.pairs[(k, ev.other)]
             dx, dy = x - xj, y - yj
-            events.append(hy.t_event(dx * dx + dy * dy - par[index], direction=negative))
+            events.append(hy.t_event(dx * dx + dy * dy - par[index], direction=negative, **typed))
         else:
             ux, uy = var[STATE_PER_BALL * k + 4], var[STATE_PER_BALL * k + 5]
             base = BALL_PARS * k
             events.append(hy.t_event(ux * par[base + DX] + uy * par[base + DY] + (1. - par[base + SLIDING]),
-                                     direction=negative))
+                                     direction=negative, **typed))
     return hy.taylor_adaptive(equations, list(state), pars=list(system.pars), t_events=events, **options)

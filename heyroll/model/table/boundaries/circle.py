@@ -28,7 +28,7 @@ class CircleBoundary:
 
     def wall_constants(self, radius) -> tuple:
         with workprec():
-            return ((self.radius - radius) ** 2,)
+            return (((self.radius - radius) ** 2,),)
 
     def gap(self, wall, x, y, c):
         return x * x + y * y - c[0]

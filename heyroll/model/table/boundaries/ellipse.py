@@ -33,6 +33,7 @@ import numpy as np
 
 from ....errors import SceneError
 from ..._numbers import workprec
+from .base import sqrt
 
 #: (i, j) of the coefficient of u^i v^j, in the order of ``offset_coefficients``.
 OFFSET_MONOMIALS = tuple((i, j) for i in range(5) for j in range(5 - i))
@@ -134,6 +135,45 @@ class EllipseBoundary:
             return 2 * c[0] * x, 2 * c[1] * y
         du, dv = _offset_partials(c[0] * x * x, c[0] * y * y, c[1:])
         return 2 * c[0] * x * du, 2 * c[0] * y * dv
+
+    def exact_distance(self, x, y, a2, b2, zero):
+        """(distance of (x, y) from the ellipse, outward unit normal there) in the numbers' own type.
+
+        Well conditioned where the gap polynomial is not (for a small ball its
+        zero sits between two nearly equal branches, inner and outer parallel
+        curves): the engine polishes each cushion impact of a finite ball with
+        it. The nearest point is (a^2 x/(a^2 + l), b^2 y/(b^2 + l)) with l the
+        root in (-min(a^2, b^2), 0) of a^2 x^2/(a^2 + l)^2 + b^2 y^2/(b^2 + l)^2 = 1,
+        a decreasing convex function of l there: Newton's method kept inside a
+        bracket. None for a point not inside the ellipse.
+        """
+        xx, yy = a2 * x * x, b2 * y * y
+
+        def phi(lam):
+            p, q = a2 + lam, b2 + lam
+            return xx / (p * p) + yy / (q * q) - 1, -2 * (xx / (p * p * p) + yy / (q * q * q))
+
+        if not phi(zero)[0] < zero:
+            return None
+        lo, hi = -(a2 if a2 < b2 else b2), zero
+        lam = hi
+        for _ in range(200):
+            value, slope = phi(lam)
+            if value > zero:
+                lo = lam
+            else:
+                hi = lam
+            step = value / slope
+            new = lam - step
+            if not lo < new < hi:
+                new = (lo + hi) / 2
+            if new == lam:
+                break
+            lam = new
+        fx, fy = a2 * x / (a2 + lam), b2 * y / (b2 + lam)
+        dx, dy = fx - x, fy - y
+        d = sqrt(dx * dx + dy * dy)
+        return d, (dx / d, dy / d)
 
     @cached_property
     def _speed_series(self):

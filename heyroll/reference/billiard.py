@@ -1,0 +1,213 @@
+"""Exact impact sequence of rolling balls and particles on a billiard table, in mpmath.
+
+An independent reference for the table engine (issue 14). It reads only the
+raw inputs of a :class:`heyroll.model.table.TableScene` (the boundary's
+numbers: a, b / width, height / vertices / radius; each ball's R, m, kappa,
+x, y, vx, vy; the laws' names and restitutions) and derives the rest here,
+by geometry rather than through the engine's gap polynomials:
+
+* a ball rolls in a straight line at constant velocity (no friction acts on
+  a rolling ball on a level table);
+* a cushion impact is where the centre's distance from the cushion reaches
+  R. On an ellipse that distance is found from the foot point (the nearest
+  point a cos th, b sin th, by Newton's method on (c - P(th)) . P'(th) = 0),
+  and along a chord R - dist is convex (the distance to the boundary of a
+  convex set is concave inside it), so the first crossing is bracketed and
+  polished by the secant method at the working precision. A particle in an
+  ellipse, a circle and straight walls give quadratic or linear equations;
+* a ball-ball impact is the smaller root of |dc + dv t| = R_i + R_j;
+* the laws: the cushion's `rolling` model (v_n -> -k v_n, tangential part
+  kept); Hedrih's law on omega_n = v_n / R with J_P = kappa m R^2 (eqs. 8-11),
+  Newton's on v_n with m, and the paper's literal `mirror` (each ball's v_n ->
+  -k v_n), all along the line of centres.
+
+Only rolling motion (no `slide` model, no initial slip) and one impact at a
+time are covered; sliding and simultaneous impacts are checked against
+closed forms in the tests.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mpmath
+
+
+@dataclass(frozen=True)
+class ReferenceImpact:
+    t: mpmath.mpf
+    i: int  # 1-based
+    j: int  # 0: the cushion
+    state_after: tuple  # per ball (x, y, vx, vy)
+
+
+def reference_impacts(scene, n_impacts: int, dps: int = 50) -> list[ReferenceImpact]:
+    """The first ``n_impacts`` impacts of ``scene`` computed at ``dps`` digits."""
+    if scene.slides:
+        raise ValueError("the billiard reference covers rolling motion only (no slide model, no initial slip)")
+    with mpmath.workdps(dps):
+        balls = [[mpmath.mpf(b.x), mpmath.mpf(b.y), mpmath.mpf(b.vx), mpmath.mpf(b.vy)] for b in scene.balls]
+        radii = [mpmath.mpf(b.body.radius) for b in scene.balls]
+        t = mpmath.mpf(0)
+        out = []
+        eps = mpmath.mpf(10) ** (-dps + 10)
+        last = None
+        while len(out) < n_impacts:
+            best = None
+            for k, ball in enumerate(balls):
+                hit = _cushion_time(scene.boundary, ball, radii[k], eps if last == ("wall", k) else 0)
+                if hit is not None and (best is None or hit[0] < best[0]):
+                    best = (hit[0], ("wall", k), hit[1])
+            for i in range(len(balls)):
+                for j in range(i + 1, len(balls)):
+                    tau = _pair_time(balls[i], balls[j], radii[i] + radii[j])
+                    if tau is not None and (best is None or tau < best[0]):
+                        best = (tau, ("pair", i, j), None)
+            if best is None:
+                break
+            tau, what, normal = best
+            for ball in balls:
+                ball[0] += ball[2] * tau
+                ball[1] += ball[3] * tau
+            t += tau
+            if what[0] == "wall":
+                k = what[1]
+                _reflect(balls[k], normal, mpmath.mpf(scene.cushion.restitution))
+                out.append(ReferenceImpact(t, k + 1, 0, tuple(tuple(b) for b in balls)))
+            else:
+                i, j = what[1], what[2]
+                _collide(scene, balls, radii, i, j)
+                out.append(ReferenceImpact(t, i + 1, j + 1, tuple(tuple(b) for b in balls)))
+            last = what
+        return out
+
+
+def _reflect(ball, normal, k):
+    vn = ball[2] * normal[0] + ball[3] * normal[1]
+    ball[2] -= (1 + k) * vn * normal[0]
+    ball[3] -= (1 + k) * vn * normal[1]
+
+
+def _collide(scene, balls, radii, i, j):
+    bi, bj = balls[i], balls[j]
+    dx, dy = bj[0] - bi[0], bj[1] - bi[1]
+    d = mpmath.sqrt(dx * dx + dy * dy)
+    n = (dx / d, dy / d)
+    vi = bi[2] * n[0] + bi[3] * n[1]
+    vj = bj[2] * n[0] + bj[3] * n[1]
+    k = mpmath.mpf(scene.law.restitution)
+    body_i, body_j = scene.balls[i].body, scene.balls[j].body
+    name = scene.law.name
+    if name == "mirror":
+        new_i, new_j = -k * vi, -k * vj
+    else:
+        if name == "hedrih":  # on omega_n = v_n / R with J_P = kappa m R^2 (eqs. 8-11)
+            ci, cj = 1 / radii[i], 1 / radii[j]
+            mi = mpmath.mpf(body_i.kappa) * mpmath.mpf(body_i.mass) * radii[i] ** 2
+            mj = mpmath.mpf(body_j.kappa) * mpmath.mpf(body_j.mass) * radii[j] ** 2
+        else:  # newton: on v_n with the masses (eqs. 1-5)
+            ci = cj = mpmath.mpf(1)
+            mi, mj = mpmath.mpf(body_i.mass), mpmath.mpf(body_j.mass)
+        ui, uj = ci * vi, cj * vj
+        ui_new = ui - (1 + k) * mj / (mi + mj) * (ui - uj)
+        uj_new = uj + (1 + k) * mi / (mi + mj) * (ui - uj)
+        new_i, new_j = ui_new / ci, uj_new / cj
+    for ball, old, new in ((bi, vi, new_i), (bj, vj, new_j)):
+        ball[2] += (new - old) * n[0]
+        ball[3] += (new - old) * n[1]
+
+
+def _pair_time(a, b, reach):
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    ux, uy = b[2] - a[2], b[3] - a[3]
+    qa = ux * ux + uy * uy
+    qb = 2 * (dx * ux + dy * uy)
+    qc = dx * dx + dy * dy - reach * reach
+    if qb >= 0 or qa == 0:
+        return None
+    disc = qb * qb - 4 * qa * qc
+    if disc < 0:
+        return None
+    tau = (-qb - mpmath.sqrt(disc)) / (2 * qa)
+    return tau if tau > 0 else None
+
+
+def _cushion_time(boundary, ball, radius, skip):
+    """(time to the first cushion contact, outward unit normal there), or None."""
+    x, y, vx, vy = ball
+    if vx == 0 and vy == 0:
+        return None
+    kind = boundary.kind
+    if kind == "circle":
+        rho = mpmath.mpf(boundary.radius) - radius
+        qa, qb, qc = vx * vx + vy * vy, 2 * (x * vx + y * vy), x * x + y * y - rho * rho
+        tau = (-qb + mpmath.sqrt(qb * qb - 4 * qa * qc)) / (2 * qa)
+        px, py = x + vx * tau, y + vy * tau
+        return tau, (px / rho, py / rho)
+    if kind in ("rectangle", "polygon"):
+        verts = [(mpmath.mpf(p), mpmath.mpf(q)) for p, q in boundary.vertices]
+        area = sum(verts[m][0] * verts[(m + 1) % len(verts)][1] - verts[(m + 1) % len(verts)][0] * verts[m][1]
+                   for m in range(len(verts)))
+        if area < 0:
+            verts = verts[::-1]
+        best = None
+        for m in range(len(verts)):
+            (x0, y0), (x1, y1) = verts[m], verts[(m + 1) % len(verts)]
+            length = mpmath.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2)
+            nx, ny = (y1 - y0) / length, -(x1 - x0) / length
+            rate = vx * nx + vy * ny
+            if rate <= 0:
+                continue
+            tau = (nx * (x0 - x) + ny * (y0 - y) - radius) / rate
+            if tau > skip and (best is None or tau < best[0]):
+                best = (tau, (nx, ny))
+        return best
+    a, b = mpmath.mpf(boundary.a), mpmath.mpf(boundary.b)
+    if radius == 0:
+        qa = vx * vx / a**2 + vy * vy / b**2
+        qb = 2 * (x * vx / a**2 + y * vy / b**2)
+        qc = x * x / a**2 + y * y / b**2 - 1
+        tau = (-qb + mpmath.sqrt(qb * qb - 4 * qa * qc)) / (2 * qa)
+        px, py = x + vx * tau, y + vy * tau
+        gx, gy = px / a**2, py / b**2
+        g = mpmath.sqrt(gx * gx + gy * gy)
+        return tau, (gx / g, gy / g)
+
+    def excess(tau):  # R - distance from the ellipse: convex along the chord
+        return radius - _ellipse_distance(a, b, x + vx * tau, y + vy * tau)[0]
+
+    # bracket: the centre's line leaves the ellipse itself (a quadratic) where the excess is R > 0;
+    # before that the excess is convex, negative now, so it crosses 0 once on the way
+    qa = vx * vx / a**2 + vy * vy / b**2
+    qb = 2 * (x * vx / a**2 + y * vy / b**2)
+    qc = x * x / a**2 + y * y / b**2 - 1
+    hi = (-qb + mpmath.sqrt(qb * qb - 4 * qa * qc)) / (2 * qa)
+    lo = mpmath.mpf(0) if skip == 0 else skip
+    for _ in range(40):
+        mid = (lo + hi) / 2
+        if excess(mid) < 0:
+            lo = mid
+        else:
+            hi = mid
+    tau = mpmath.findroot(excess, (lo, hi), solver="secant")
+    px, py = x + vx * tau, y + vy * tau
+    _, (fx, fy) = _ellipse_distance(a, b, px, py)
+    d = mpmath.sqrt((fx - px) ** 2 + (fy - py) ** 2)
+    return tau, ((fx - px) / d, (fy - py) / d)
+
+
+def _ellipse_distance(a, b, px, py):
+    """(distance, foot point) of an inside point from the ellipse (nearest point, by Newton on the angle)."""
+    # start from the angle of the point scaled onto the ellipse's normal direction: near the
+    # boundary the nearest point's eccentric angle is close to atan2(a py, b px)
+    th = mpmath.atan2(a * py, b * px)
+    for _ in range(200):
+        c, s = mpmath.cos(th), mpmath.sin(th)
+        f = (a * c - px) * (-a * s) + (b * s - py) * (b * c)  # (P - p) . P'
+        df = (a * s) ** 2 + (b * c) ** 2 + (a * c - px) * (-a * c) + (b * s - py) * (-b * s)
+        step = f / df
+        th -= step
+        if abs(step) < mpmath.eps * 4:
+            break
+    fx, fy = a * mpmath.cos(th), b * mpmath.sin(th)
+    return mpmath.sqrt((fx - px) ** 2 + (fy - py) ** 2), (fx, fy)

@@ -1,0 +1,432 @@
+"""Billiards on the one engine (paper section 7, issue 14): closed forms, an mpmath reference, bad input.
+
+Every check below compares the engine with something it does not compute
+itself: unfolded straight lines in a rectangle, the integrals of the
+elliptical billiard, Poncelet orbits built geometrically, the slide models'
+closed forms from the angular momentum about the cloth contact, the
+independent mpmath reference (heyroll.reference.billiard).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import mpmath
+import numpy as np
+import pytest
+
+from heyroll.errors import SceneError
+from heyroll.interfaces.scene_file import parse_scene
+from heyroll.model.table import EllipseBoundary
+from heyroll.model.table.boundaries.ellipse import offset_polynomial
+from heyroll.reference.billiard import _cushion_time, reference_impacts
+from heyroll.simulation.driver import simulate
+from heyroll.simulation.result import Status
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def table_scene(boundary: str, balls: list[dict], *, law="hedrih", k=1, cushion="rolling", cushion_k=1,
+                friction="0.2", simultaneous="sequential", t_end=50, max_collisions=None, name="t"):
+    lines = ['[track]', 'type = "table"', boundary, f'cushion_model = "{cushion}"',
+             f'cushion_restitution = {cushion_k}', f'friction = {friction}']
+    for ball in balls:
+        lines.append("[[bodies]]")
+        lines += [f'{key} = "{value}"' if key == "shape" else f"{key} = {value}" for key, value in ball.items()]
+    lines += ["[collision]", f'law = "{law}"', f"restitution = {k}", f'simultaneous = "{simultaneous}"', "[run]",
+              f"t_end = {t_end}"]
+    if max_collisions is not None:
+        lines.append(f"max_collisions = {max_collisions}")
+    return parse_scene("\n".join(lines), default_name=name)
+
+
+ELLIPSE = 'boundary = "ellipse"\na = 2.0\nb = 1.0'
+
+
+def particle(x, y, vx, vy):
+    return {"shape": "particle", "radius": 0, "mass": 1, "x": x, "y": y, "vx": vx, "vy": vy}
+
+
+def ball(x, y, vx, vy, radius="0.1", mass="0.17", shape="solid_sphere"):
+    return {"shape": shape, "radius": radius, "mass": mass, "x": x, "y": y, "vx": vx, "vy": vy}
+
+
+# -- the cushion of a finite ball in an ellipse ------------------------------------------------
+
+
+@pytest.mark.parametrize("a, b, r", [("2", "1", "0.1"), ("3", "2.5", "1.2"), ("1", "0.3", "0.05")])
+def test_the_parallel_curve_polynomial_vanishes_on_the_curve_of_the_centre(a, b, r):
+    """The degree-8 polynomial against the parallel curve P(th) - R n(th), built here in mpmath."""
+    with mpmath.workdps(60):
+        ell = EllipseBoundary(mpmath.mpf(a), mpmath.mpf(b))
+        c = ell.wall_constants(mpmath.mpf(r))[0]
+        a, b, r = mpmath.mpf(a), mpmath.mpf(b), mpmath.mpf(r)
+        for th in mpmath.linspace(0, 2 * mpmath.pi, 23):
+            n = (b * mpmath.cos(th), a * mpmath.sin(th))
+            norm = mpmath.hypot(*n)
+            x, y = a * mpmath.cos(th) - r * n[0] / norm, b * mpmath.sin(th) - r * n[1] / norm
+            assert abs(ell.gap(0, x, y, c)) < mpmath.mpf(10) ** -50
+            # and it is negative just inside, positive just outside, along the normal
+            assert ell.gap(0, x - r / 100 * n[0] / norm, y - r / 100 * n[1] / norm, c) < 0
+            assert ell.gap(0, x + r / 100 * n[0] / norm, y + r / 100 * n[1] / norm, c) > 0
+
+
+def test_the_gap_has_no_zero_inside_the_curve_of_the_centre():
+    ell = EllipseBoundary(mpmath.mpf(2), mpmath.mpf(1))
+    c = [float(v) for v in ell.wall_constants(mpmath.mpf("0.4"))[0]]
+    rng = np.random.default_rng(3)
+    # points well inside the centre's curve: a shrunk copy of it
+    th = rng.uniform(0, 2 * np.pi, 20000)
+    shrink = rng.uniform(0, 0.97, th.size)
+    n = np.stack([1 * np.cos(th), 2 * np.sin(th)])
+    n /= np.hypot(*n)
+    x = shrink * (2 * np.cos(th) - 0.4 * n[0])
+    y = shrink * (1 * np.sin(th) - 0.4 * n[1])
+    assert np.all(ell.gap(0, x, y, c) < 0)
+
+
+# -- the rectangle unfolds into straight lines -------------------------------------------------
+
+
+def unfolded_times(x0, v, half, n):
+    """Wall times of x0 + v t reflected between -half and half."""
+    if v == 0:
+        return []
+    first = (half - x0) / v if v > 0 else (-half - x0) / v
+    period = 2 * half / abs(v)
+    return [first + m * period for m in range(n)]
+
+
+@pytest.mark.parametrize("radius, shape", [("0", "particle"), ("0.05", "solid_sphere")])
+def test_rectangle_impact_times_are_the_unfolded_lines(radius, shape):
+    body = {"shape": shape, "radius": radius, "mass": 1, "x": 0.1, "y": -0.13, "vx": 0.7, "vy": 0.31}
+    scene = table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 1.0', [body], law="newton", t_end=2000,
+                        max_collisions=400)
+    result = simulate(scene)
+    table = result.collision_table()
+    r = float(radius)
+    times = sorted(unfolded_times(0.1, 0.7, 1 - r, 400) + unfolded_times(-0.13, 0.31, 0.5 - r, 400))[:400]
+    assert result.status is Status.MAX_COLLISIONS
+    got = table["t"]
+    assert np.max(np.abs(got - times) / np.array(times)) < 1e-14
+    # speed and |vx|, |vy| kept exactly by reflections in straight walls
+    assert set(np.abs(table["vx_i_after"])) == {0.7} and set(np.abs(table["vy_i_after"])) == {0.31}
+
+
+def test_a_corner_hit_reverses_the_ball_two_cushions_at_one_instant():
+    body = ball("0.0", "0.0", "0.95", "0.45", radius="0.05")  # at t = 1 at the corner (0.95, 0.45) of its centre
+    scene = table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 1.0', [body], max_collisions=2)
+    result = simulate(scene)
+    t = result.collision_table()
+    assert t["t"][0] == t["t"][1] == pytest.approx(1, rel=1e-15)
+    assert (t["vx_i_after"][1], t["vy_i_after"][1]) == (-0.95, -0.45)
+
+
+# -- the elliptical billiard -------------------------------------------------------------------
+
+
+def ellipse_run(x, y, vx, vy, n=1000):
+    scene = table_scene(ELLIPSE, [particle(x, y, vx, vy)], law="newton", t_end=1e6, max_collisions=n)
+    return simulate(scene).collision_table()
+
+
+def test_ellipse_integrals_of_a_particle_are_conserved_over_a_thousand_impacts():
+    """Joachimsthal's integral at the impacts, the focal angular momenta product and the caustic."""
+    t = ellipse_run(0.3, -0.2, 1.0, 0.7)
+    a, b = 2.0, 1.0
+    f = math.sqrt(a * a - b * b)
+    x, y, vx, vy = t["x_i"], t["y_i"], t["vx_i_after"], t["vy_i_after"]
+    speed = np.hypot(vx, vy)
+    dx, dy = vx / speed, vy / speed
+    joachimsthal = -(x * dx / a**2 + y * dy / b**2)
+    product = ((x - f) * dy - y * dx) * ((x + f) * dy - y * dx)
+    caustic = a * a * dy * dy + b * b * dx * dx - (x * dy - y * dx) ** 2
+    for integral in (joachimsthal, product, caustic):
+        assert np.ptp(integral) < 1e-12 * max(1, np.max(np.abs(integral)))
+    assert np.all(joachimsthal > 0)
+    assert np.allclose(caustic, b * b - product, atol=1e-13)  # one integral seen two ways
+    assert np.ptp(speed) < 1e-13
+
+
+def test_the_period_two_orbits_close_with_the_axes_as_perimeters():
+    for x, y, vx, vy, half in ((0.0, 0.3, 0.0, 1.0, 1.0), (0.5, 0.0, 1.0, 0.0, 2.0)):
+        t = ellipse_run(x, y, vx, vy, n=21)
+        steps = np.diff(t["t"])
+        assert np.allclose(steps, 2 * half, rtol=1e-14)  # the minor axis 4b, the major 4a per period
+
+
+def test_the_poncelet_period_four_rhombus_closes():
+    a, b = 2.0, 1.0
+    # a particle on the chord from (0, b) to (a, 0), moving towards (a, 0)
+    side = math.hypot(a, b)
+    t = ellipse_run(a / 2, b / 2, a / side, -b / side, n=40)
+    assert np.allclose(np.abs(t["x_i"][::2]), a, atol=1e-12) or np.allclose(np.abs(t["x_i"][1::2]), a, atol=1e-12)
+    assert np.allclose(t["t"][4:] - t["t"][:-4], 4 * side, rtol=1e-13)
+
+
+def test_the_poncelet_period_three_triangle_closes():
+    """The isosceles 3-orbit with a vertex at (a, 0): its other two vertices (x1, +-y1) solved here."""
+    a, b = mpmath.mpf(2), mpmath.mpf(1)
+
+    def mirror_defect(x1):
+        y1 = b * mpmath.sqrt(1 - x1**2 / a**2)
+        nx, ny = x1 / a**2, y1 / b**2
+        inc = mpmath.matrix([a - x1, -y1]) / mpmath.hypot(a - x1, y1)  # towards (a, 0)
+        out = mpmath.matrix([0, -1])  # the vertical chord to (x1, -y1)
+        return (inc[0] * nx + inc[1] * ny) - (out[0] * nx + out[1] * ny)
+
+    x1 = mpmath.findroot(mirror_defect, (mpmath.mpf("-1.99"), mpmath.mpf(0)), solver="anderson")
+    y1 = b * mpmath.sqrt(1 - x1**2 / a**2)
+    perimeter = 2 * mpmath.hypot(a - x1, y1) + 2 * y1
+    start = ((a + x1) / 2, y1 / 2)
+    d = mpmath.matrix([x1 - a, y1]) / mpmath.hypot(a - x1, y1)  # from (a, 0) towards (x1, y1)
+    t = ellipse_run(float(start[0]), float(start[1]), float(d[0]), float(d[1]), n=30)
+    assert np.allclose(t["t"][3:] - t["t"][:-3], float(perimeter), rtol=1e-12)
+
+
+def test_impact_times_in_the_ellipse_against_the_mpmath_reference():
+    """Each cushion impact of a finite ball, predicted by the reference from the engine's previous one."""
+    scene = table_scene(ELLIPSE, [ball("0.3", "-0.2", "1.0", "0.7")], t_end=1e4, max_collisions=25)
+    table = simulate(scene).collision_table()
+    with mpmath.workdps(40):
+        ell = scene.boundary
+        worst = 0.0
+        for prev, row in zip(table[:-1], table[1:]):
+            state = [mpmath.mpf(float(prev[c])) for c in ("x_i", "y_i", "vx_i_after", "vy_i_after")]
+            tau, _ = _cushion_time(ell, state, mpmath.mpf("0.1"), mpmath.mpf(10) ** -30)
+            worst = max(worst, abs(float(row["t"]) - float(prev["t"] + tau)) / float(row["t"]))
+    assert worst < 4e-15
+
+
+def test_two_balls_against_the_reference_for_the_first_impacts():
+    scene = table_scene(ELLIPSE, [ball("0.3", "-0.2", "1.0", "0.7"), ball("-0.5", "0.2", "-0.3", "0.5")],
+                        t_end=100, max_collisions=12)
+    table = simulate(scene).collision_table()
+    ref = reference_impacts(scene, 12, dps=40)
+    assert [(r["i"], r["j"]) for r in table] == [(x.i, x.j) for x in ref]
+    times = np.array([float(x.t) for x in ref])
+    assert np.max(np.abs(table["t"] - times) / times) < 1e-12  # round-off grows with every reflection
+
+
+@pytest.mark.parametrize("law", ["hedrih", "newton", "mirror"])
+def test_ball_laws_against_the_reference_in_a_circle(law):
+    scene = table_scene('boundary = "circle"\nradius = 1.0',
+                        [ball("-0.5", "0.0", "1.0", "0.05", radius="0.1", mass="1"),
+                         ball("0.4", "0.02", "-0.5", "0.0", radius="0.15", mass="2", shape="disk")],
+                        law=law, k="0.8", t_end=3, max_collisions=3)
+    table = simulate(scene).collision_table()
+    ref = reference_impacts(scene, 3, dps=40)
+    pair = [x for x in ref if x.j == 2][0]
+    row = table[table["j"] == 2][0]
+    assert float(pair.t) == pytest.approx(row["t"], rel=1e-14)
+    after = pair.state_after
+    for col, value in (("vx_i_after", after[0][2]), ("vy_i_after", after[0][3]), ("vx_j_after", after[1][2]),
+                       ("vy_j_after", after[1][3])):
+        assert row[col] == pytest.approx(float(value), rel=1e-13, abs=1e-15)
+
+
+# -- energy --------------------------------------------------------------------------------------
+
+
+def test_energy_is_exact_at_k_one_and_eq_15_gives_the_loss_below():
+    balls = [ball("0.3", "-0.2", "1.0", "0.7"), ball("-0.5", "0.2", "-0.3", "0.5"),
+             ball("1.0", "0.1", "0.2", "-0.9", radius="0.12", mass="0.3")]
+    elastic = simulate(table_scene(ELLIPSE, balls, t_end=200)).collision_table()
+    assert len(elastic) > 100
+    assert np.max(np.abs(elastic["energy_after"] - elastic["energy_before"])) < 1e-15
+    lossy = simulate(table_scene(ELLIPSE, balls, k="0.6", t_end=200)).collision_table()
+    pairs = lossy[(lossy["j"] > 0) & (lossy["law_flag"] == 0)]
+    assert len(pairs) > 3
+    radii, masses, kappa, k = {1: 0.1, 2: 0.1, 3: 0.12}, {1: 0.17, 2: 0.17, 3: 0.3}, 1.4, 0.6
+    for row in pairs:
+        i, j = int(row["i"]), int(row["j"])
+        n = np.array([row["x_j"] - row["x_i"], row["y_j"] - row["y_i"]])
+        n /= np.hypot(*n)
+        wi = (row["vx_i_before"] * n[0] + row["vy_i_before"] * n[1]) / radii[i]
+        wj = (row["vx_j_before"] * n[0] + row["vy_j_before"] * n[1]) / radii[j]
+        ji, jj = kappa * masses[i] * radii[i] ** 2, kappa * masses[j] * radii[j] ** 2
+        loss = 0.5 * ji * jj / (ji + jj) * (1 - k * k) * (wi - wj) ** 2  # eq. (15)
+        assert row["energy_before"] - row["energy_after"] == pytest.approx(loss, rel=1e-9)
+
+
+# -- sliding: the slide models' closed forms ---------------------------------------------------
+
+
+@pytest.mark.parametrize("k", ["1", "0.5"])
+def test_a_rolling_ball_comes_back_from_a_head_on_cushion_at_kappa_minus_1_minus_k_over_kappa(k):
+    scene = table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 1.0', [ball("0", "0", "1.5", "0")],
+                        cushion="slide", cushion_k=k, friction="0.2", t_end=5, max_collisions=1)
+    result = simulate(scene, max_collisions=None, t_end=1.5)
+    assert result.n_rerolls == 1
+    vx = result.state_final[2]
+    kappa = 1.4
+    assert vx == pytest.approx(1.5 * (kappa - 1 - float(k)) / kappa, rel=1e-13)
+    assert result.state_final[3] == 0 and result.state_final[4] == result.state_final[5] == 0
+
+
+def cut_shot(angle):
+    """A rolling cue ball hits a resting object ball with the line of centres at ``angle`` (rad) to its path."""
+    d = 0.2  # two radii of 0.1
+    ox, oy = 0.0, 0.0
+    cx, cy = ox - d * math.cos(angle), oy - d * math.sin(angle)
+    start = (cx - 0.3, cy)
+    balls = [ball(repr(start[0]), repr(start[1]), "1.0", "0"), ball("0", "0", "0", "0")]
+    scene = table_scene('boundary = "circle"\nradius = 5.0', balls, law="slide", friction="0.2", t_end=1.5)
+    return simulate(scene)
+
+
+@pytest.mark.parametrize("angle", [0.2, math.atan(math.sqrt(0.4 / 1.4)), 0.9])
+def test_the_cue_ball_deflection_after_a_rolling_cut_shot(angle):
+    """After the impulse through the centres and sliding: tan theta = sin c cos c / (sin^2 c + 2/5)."""
+    result = cut_shot(angle)
+    vx, vy = result.state_final[2], result.state_final[3]
+    assert result.n_rerolls == 2  # both balls slide after the impact, and roll again
+    theta = math.atan2(-vy, vx)
+    expected = math.atan(math.sin(angle) * math.cos(angle) / (math.sin(angle) ** 2 + 0.4))
+    assert theta == pytest.approx(expected, abs=1e-12)
+    if angle == math.atan(math.sqrt(0.4 / 1.4)):  # the maximum: 1 / (2 sqrt(p (1 + p))), p = 2/5
+        assert math.degrees(theta) == pytest.approx(math.degrees(math.atan(1 / (2 * math.sqrt(0.56)))), abs=1e-9)
+        assert 33.7 < math.degrees(theta) < 33.8
+
+
+# -- simultaneous collisions: Newton's cradle --------------------------------------------------
+
+
+def cradle(policy):
+    row = [ball("-0.5", "0", "1", "0", mass="1")] + [ball(repr(0.2 * m), "0", "0", "0", mass="1") for m in range(2)]
+    scene = table_scene('boundary = "circle"\nradius = 5.0', row, law="newton", simultaneous=policy, t_end=1)
+    return simulate(scene)
+
+
+def test_newtons_cradle_sequential_passes_the_impulse_along_the_row():
+    result = cradle("sequential")
+    v = [result.state_final[6 * k + 2] for k in range(3)]
+    assert v == [0, 0, 1]
+
+
+def test_newtons_cradle_simultaneous_impulses_give_the_complementarity_outcome():
+    result = cradle("impulses")
+    v = np.array([result.state_final[6 * k + 2] for k in range(3)])
+    assert np.allclose(v, [-1 / 3, 2 / 3, 2 / 3], atol=1e-15)
+    assert v.sum() == pytest.approx(1, abs=1e-15)  # momentum
+    assert result.energy_final == pytest.approx(result.energy_initial, rel=1e-14)
+
+
+def test_symmetric_starts_resolve_every_pair_at_the_same_instant():
+    """Four balls launched at the centre meet at one instant: no overlap, momentum zero, energy kept."""
+    s = 0.5
+    balls = [ball(repr(x), repr(y), repr(-x), repr(-y)) for x, y in ((s, 0), (0, s), (-s, 0), (0, -s))]
+    scene = table_scene('boundary = "circle"\nradius = 1.0', balls, law="newton", t_end=3)
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED
+    state = np.array(result.state_final, dtype=float).reshape(4, 6)
+    assert np.allclose(state[:, 2:4].sum(axis=0), 0, atol=1e-14)
+    assert result.energy_final == pytest.approx(result.energy_initial, rel=1e-14)
+
+
+# -- precision ladder ----------------------------------------------------------------------------
+
+
+def test_quad_precision_agrees_with_double_and_keeps_its_digits():
+    scene = table_scene(ELLIPSE, [ball("0.3", "-0.2", "1.0", "0.7")], t_end=100, max_collisions=5)
+    double = simulate(scene).collision_table()
+    quad = simulate(scene, precision="quad").collision_table(native=True)
+    assert [float(t) for t in quad["t"]] == pytest.approx(list(double["t"]), rel=1e-14)
+    ref = reference_impacts(scene, 5, dps=50)
+    with mpmath.workdps(50):
+        assert abs(mpmath.mpf(str(quad["t"][4])) - ref[4].t) < 1e-28
+
+
+# -- files and bad input -------------------------------------------------------------------------
+
+
+def write(tmp_path, text, name="table.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+TABLE = """
+[track]
+type = "table"
+boundary = "ellipse"
+a = 2.0
+b = 1.0
+cushion_model = "rolling"
+cushion_restitution = 1.0
+friction = 0.2
+
+[[bodies]]
+shape = "solid_sphere"
+radius = 0.1
+mass = 0.17
+x = 0.3
+y = -0.2
+vx = 1.0
+vy = 0.7
+
+[collision]
+law = "hedrih"
+restitution = 1.0
+simultaneous = "sequential"
+
+[run]
+t_end = 20.0
+max_collisions = 10000
+"""
+
+
+def run_cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", *args], cwd=cwd, capture_output=True, text=True)
+
+
+def test_the_cli_writes_the_table_columns_summary_and_figures(tmp_path):
+    path = write(tmp_path, TABLE)
+    out = run_cli("run", str(path), "--out", str(tmp_path / "out"), "--progress", "off", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    with open(tmp_path / "out" / "collisions.csv") as f:
+        rows = list(csv.DictReader(f))
+    need = ("n,t,i,j,x_i,y_i,vx_i_before,vy_i_before,vx_i_after,vy_i_after,x_j,y_j,vx_j_before,vy_j_before,"
+            "vx_j_after,vy_j_after,energy_before,energy_after,boundary_s,reflection_angle").split(",")
+    assert list(rows[0])[:len(need)] == need
+    assert all(r["j"] == "0" and r["x_j"] == "" and r["boundary_s"] != "" for r in rows)
+    import json
+
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"] == "completed" and summary["collisions"] == len(rows)
+    assert (tmp_path / "out" / "table_paths.png").stat().st_size > 0
+    assert (tmp_path / "out" / "birkhoff_map.png").stat().st_size > 0
+    # 17 digits round-trip
+    first = simulate(parse_scene(TABLE), max_collisions=1).collision_table()
+    assert float(rows[0]["t"]) == first["t"][0]
+
+
+BAD = [
+    ("x = 0.3\ny = -0.2", "x = 1.95\ny = 0.0", "bodies[1].x"),
+    ("radius = 0.1\nmass", "radius = 0.5\nmass", "bodies[1].radius"),  # R >= b^2/a = 0.5
+    ("restitution = 1.0\nsimultaneous", "restitution = 1.5\nsimultaneous", "collision.restitution"),
+    ("cushion_restitution = 1.0", "cushion_restitution = -0.1", "track.cushion_restitution"),
+    ('boundary = "ellipse"\na = 2.0\nb = 1.0',
+     'boundary = "polygon"\nvertices = [[-1, -1], [1, -1], [0, -0.5], [1, 1], [-1, 1]]', "track.vertices"),
+    ('law = "hedrih"', 'law = "elastic"', "collision.law"),
+    ('boundary = "ellipse"', 'boundary = "oval"', "track.boundary"),
+]
+
+
+@pytest.mark.parametrize("old, new, field", BAD)
+def test_bad_table_input_is_one_line_exit_2_nothing_written(tmp_path, old, new, field):
+    assert old in TABLE
+    path = write(tmp_path, TABLE.replace(old, new))
+    out = run_cli("run", str(path), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert out.returncode == 2
+    assert out.stderr.count("\n") == 1 and field in out.stderr, out.stderr
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def test_overlapping_balls_are_refused():
+    with pytest.raises(SceneError, match=r"bodies\[2\]"):
+        table_scene(ELLIPSE, [ball("0", "0", "1", "0"), ball("0.15", "0", "0", "0")])
