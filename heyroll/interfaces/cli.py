@@ -108,6 +108,14 @@ def build_parser() -> argparse.ArgumentParser:
     por.add_argument("--out", default="heyroll-portrait", help="output directory (default: heyroll-portrait)")
     por.add_argument("--body", default="1", help="which body (1..N; default 1)")
     por.add_argument("--omega-max", dest="omega_max", help="bifurcation diagram from 0 to this Omega (rad/s)")
+    bil = sub.add_parser("billiard", help="billiard tables (paper section 7): periodic orbits and their stability")
+    bsub = bil.add_subparsers(dest="billiard_command", required=True, parser_class=_Parser)
+    orb = bsub.add_parser("orbits", help="periodic orbits of a table scene's ball: perimeter, stability (trace)")
+    orb.add_argument("scene", help="table scene file (TOML, track type = \"table\")")
+    orb.add_argument("--period", required=True, help="number of cushion impacts per period (>= 2)")
+    orb.add_argument("--rotation", default="1", help="rotation number p of p/period (default 1)")
+    orb.add_argument("--ball", default="1", help="which ball's radius sets the curve of its centre (default 1)")
+    orb.add_argument("--json", action="store_true", help="print a JSON array of orbits")
     _add_sweep_parsers(sub)
     show = sub.add_parser("default-scene", help="print the built-in default scene as TOML")
     show.set_defaults()
@@ -136,6 +144,8 @@ def main(argv: list[str] | None = None) -> int:
             return _sweep(args, argv)
         if args.command == "plot":
             return _plot(args)
+        if args.command == "billiard":
+            return _billiard_orbits(args)
         return _run(args)
     except SceneError as exc:
         print(f"heyroll: error: {exc}", file=sys.stderr)
@@ -310,6 +320,32 @@ def _body_number(text: str, scene: Scene) -> int:
     if not 1 <= n <= len(scene.bodies):
         raise BadInput("--body", f"must be in 1..{len(scene.bodies)}, got {n}")
     return n - 1
+
+
+def _billiard_orbits(args) -> int:
+    import json
+
+    from ..analysis.billiard_orbits import periodic_orbits
+
+    period = _collision_count(args.period, "--period")
+    rotation = _collision_count(args.rotation, "--rotation")
+    ball = _collision_count(args.ball, "--ball")
+    scene = load_scene(args.scene)
+    if getattr(scene, "kind", None) != "table":
+        raise BadInput("scene", 'billiard orbits needs a table scene ([track] type = "table")')
+    orbits = periodic_orbits(scene, period, rotation, ball)
+    if args.json:
+        print(json.dumps([o.as_dict() for o in orbits], indent=2))
+        return EXIT_OK
+    print(f"{scene.boundary.describe()}, ball {ball} (R = {float(scene.balls[ball - 1].body.radius):.6g} m): "
+          f"periodic orbits of period {period}, rotation {rotation}/{period}")
+    print(f"{'kind':>8} {'perimeter (m)':>22} {'trace':>22} stability   vertices (centre)")
+    for o in orbits:
+        vertices = " ".join(f"({x:.6f}, {y:.6f})" for x, y in o.points)
+        print(f"{o.kind:>8} {o.perimeter:22.17g} {o.trace:22.15g} {o.stability:<11} {vertices}")
+    if not orbits:
+        print("none found")
+    return EXIT_OK
 
 
 def _equilibria(args) -> int:

@@ -36,6 +36,11 @@ class CircleBoundary:
     def gradient(self, wall, x, y, c):
         return 2 * x, 2 * y
 
+    def centre_curve(self, radius, theta):
+        """(x, y, dx/dtheta, dy/dtheta) of the curve a ball's centre reaches, theta in [0, 2 pi) (numpy)."""
+        rho = float(self.radius - radius)
+        return rho * np.cos(theta), rho * np.sin(theta), -rho * np.sin(theta), rho * np.cos(theta)
+
     def perimeter(self) -> float:
         return float(2 * mpmath.pi * self.radius)
 

@@ -189,6 +189,18 @@ class EllipseBoundary:
                 return coef[: m // 4]
             m *= 4
 
+    def centre_curve(self, radius, theta):
+        """(x, y, dx/dtheta, dy/dtheta) of P(theta) - R n(theta), the curve a ball's centre reaches (numpy)."""
+        a, b, r = float(self.a), float(self.b), float(radius)
+        c, s = np.cos(theta), np.sin(theta)
+        mx, my = b * c, a * s  # the outward normal's direction
+        dmx, dmy = -b * s, a * c
+        norm = np.hypot(mx, my)
+        dnorm = (mx * dmx + my * dmy) / norm
+        nx, ny = mx / norm, my / norm
+        dnx, dny = dmx / norm - mx * dnorm / norm**2, dmy / norm - my * dnorm / norm**2
+        return a * c - r * nx, b * s - r * ny, -a * s - r * dnx, b * c - r * dny
+
     def perimeter(self) -> float:
         return float(2 * np.pi * self._speed_series[0])
 

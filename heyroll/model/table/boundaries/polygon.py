@@ -98,6 +98,28 @@ class PolygonBoundary:
     def gradient(self, wall, x, y, c):
         return c[0], c[1]
 
+    def centre_polygon(self, radius) -> np.ndarray:
+        """Vertices of the polygon a ball's centre reaches: every edge moved inward by R (float64)."""
+        verts = np.array([[float(x), float(y)] for x, y in self.vertices])
+        normals = np.array([[float(nx), float(ny)] for nx, ny, _h, _l in self._edges()])
+        before = np.roll(normals, 1, axis=0)  # the edge ending at vertex k
+        r = float(radius)
+        return verts - r * (before + normals) / (1 + np.sum(before * normals, axis=1))[:, None]
+
+    def centre_curve(self, radius, theta):
+        """(x, y, dx/dtheta, dy/dtheta) along the centre's polygon, theta in [0, 2 pi) mapped to arc length."""
+        verts = self.centre_polygon(radius)
+        ends = np.roll(verts, -1, axis=0)
+        lengths = np.hypot(*(ends - verts).T)
+        total = lengths.sum()
+        start = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+        s = np.mod(np.asarray(theta, float), 2 * np.pi) * total / (2 * np.pi)
+        k = np.clip(np.searchsorted(start, s, side="right") - 1, 0, len(verts) - 1)
+        along = (ends[k] - verts[k]) / lengths[k][..., None]
+        point = verts[k] + along * (s - start[k])[..., None]
+        scale = total / (2 * np.pi)
+        return point[..., 0], point[..., 1], along[..., 0] * scale, along[..., 1] * scale
+
     def perimeter(self) -> float:
         return float(sum(e[3] for e in self._edges()))
 

@@ -1,0 +1,74 @@
+"""Periodic orbits of billiard tables (heyroll billiard orbits): closed forms and the engine's own runs."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from heyroll.analysis.billiard_orbits import periodic_orbits
+from heyroll.simulation.driver import simulate
+
+from test_billiards import ELLIPSE, TABLE, ball, particle, table_scene, write
+
+
+def two_orbit_trace(chord, rho):
+    """The 2-bounce orbit between two points of equal curvature radius rho: tr = 4 (1 - chord/rho)^2 - 2."""
+    return 4 * (1 - chord / rho) ** 2 - 2
+
+
+@pytest.mark.parametrize("radius", ["0", "0.1", "0.3"])
+def test_the_two_period_two_orbits_of_the_ellipse_and_their_stability(radius):
+    a, b, r = 2.0, 1.0, float(radius)
+    body = particle(0.3, -0.2, 1, 0.7) if r == 0 else ball("0.3", "-0.2", "1", "0.7", radius=radius)
+    major, minor = periodic_orbits(table_scene(ELLIPSE, [body]), 2)
+    assert (major.kind, minor.kind) == ("max", "minimax")
+    assert major.perimeter == pytest.approx(4 * (a - r), rel=1e-14)
+    assert minor.perimeter == pytest.approx(4 * (b - r), rel=1e-14)
+    # the centre's curve has the ellipse's radii of curvature less R: b^2/a - R at the major axis' ends
+    assert major.trace == pytest.approx(two_orbit_trace(2 * (a - r), b * b / a - r), rel=1e-8)
+    assert minor.trace == pytest.approx(two_orbit_trace(2 * (b - r), a * a / b - r), rel=1e-8, abs=1e-9)
+    assert (major.stability, minor.stability) == ("unstable", "stable")
+
+
+def test_poncelet_families_of_a_particle_have_one_perimeter():
+    orbits4 = periodic_orbits(table_scene(ELLIPSE, [particle(0.3, -0.2, 1, 0.7)]), 4)
+    assert len(orbits4) == 1 and orbits4[0].kind == "family" and orbits4[0].stability == "parabolic"
+    assert orbits4[0].perimeter == pytest.approx(4 * math.sqrt(5), rel=1e-13)  # the rhombus through the vertices
+    orbits3 = periodic_orbits(table_scene(ELLIPSE, [particle(0.3, -0.2, 1, 0.7)]), 3)
+    assert len(orbits3) == 1 and orbits3[0].kind == "family"
+
+
+def test_a_finite_ball_breaks_the_families_and_the_engine_closes_the_orbits():
+    scene = table_scene(ELLIPSE, [ball("0.3", "-0.2", "1", "0.7")])
+    orbits = periodic_orbits(scene, 4)
+    assert {o.kind for o in orbits} == {"max", "minimax"}
+    assert all(o.stability != "parabolic" for o in orbits)
+    for orbit in orbits:
+        p0, p1 = orbit.points[0], orbit.points[1]
+        mid = (p0 + p1) / 2
+        d = (p1 - p0) / np.linalg.norm(p1 - p0)
+        run = table_scene(ELLIPSE, [ball(repr(float(mid[0])), repr(float(mid[1])), repr(float(d[0])), repr(float(d[1])))], max_collisions=8)
+        table = simulate(run, t_end=1e3).collision_table()
+        # the ball hits the orbit's vertices in turn: p1, p2, ..., then p1 again
+        centres = np.stack([table["x_i"], table["y_i"]], 1)
+        expected = np.roll(orbit.points, -1, axis=0)
+        assert np.max(np.abs(centres[:4] - expected)) < 1e-9
+        assert np.max(np.abs(centres[4:8] - expected)) < 1e-6 if orbit.stability == "unstable" else 1e-9
+        assert table["t"][4] - table["t"][0] == pytest.approx(orbit.perimeter, rel=1e-9)  # unit speed: time = length
+
+
+def test_the_cli_lists_orbits_and_refuses_bad_periods(tmp_path):
+    path = write(tmp_path, TABLE)
+    out = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "billiard", "orbits", str(path),
+                          "--period", "2", "--json"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    orbits = json.loads(out.stdout)
+    assert [o["stability"] for o in orbits] == ["unstable", "stable"]
+    bad = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "billiard", "orbits", str(path),
+                          "--period", "1"], capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--period" in bad.stderr
