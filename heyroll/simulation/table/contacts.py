@@ -44,6 +44,8 @@ class ContactGeometry:
         #: beyond this a contact overlaps: an impact was missed
         self.overlap = num(2.0**20 * precision.epsilon * size)
         self.zero = num(0)
+        #: Newton's method on the foot point stops one step after a relative step this small
+        self.newton_tol = num(2.0**-((precision.bits + 1) // 2))
         #: balls whose cushion impacts are polished with the boundary's exact distance (ellipse, R > 0)
         self.exact = {}
         if hasattr(self.boundary, "exact_distance"):
@@ -64,7 +66,11 @@ class ContactGeometry:
     def exact_wall(self, k, x, y):
         """(distance from the cushion minus R, outward unit normal) of ball k by the exact distance, or None."""
         a2, b2, r = self.exact[k]
-        found = self.boundary.exact_distance(x, y, a2, b2, self.zero)
+        # Newton's method starts from the foot point guessed one radius along the normal at the centre
+        gx, gy = x / a2, y / b2
+        g = sqrt(gx * gx + gy * gy)
+        fx, fy = (x + r * gx / g) / a2, (y + r * gy / g) / b2
+        found = self.boundary.exact_distance(x, y, a2, b2, self.zero, -r / sqrt(fx * fx + fy * fy), self.newton_tol)
         if found is None:
             return None
         d, normal = found

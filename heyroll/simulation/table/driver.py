@@ -213,7 +213,7 @@ class _Run:
         is off by up to ~1e-12 relative for R = a/200, this brings it back to round-off."""
         s = STATE_PER_BALL * k
         found = None
-        for _ in range(3):
+        for _ in range(2):  # Newton's method from heyoka's root, already within ~1e-12: one step, one check
             found = self.geometry.exact_wall(k, self.state[s], self.state[s + 1])
             if found is None:
                 return None
@@ -253,8 +253,8 @@ class _Run:
             for _ in range(MAX_AT_ONE_INSTANT):
                 if self.status is not None:
                     return
-                waiting = [c for c in geometry.contacts(self.state, geometry.touch)
-                           if geometry.approach(c, self.state) > self.zero]
+                near = geometry.contacts(self.state, geometry.touch)
+                waiting = [c for c in near if geometry.approach(c, self.state) > self.zero]
                 if not waiting:
                     break
                 self.resolve(waiting[0])
@@ -262,7 +262,9 @@ class _Run:
                 self.stop(Status.FAILED, f"more than {MAX_AT_ONE_INSTANT} impacts at t = {float(self.t):.17g} s "
                                          "(an inelastic collapse): stopped")
                 return
-        overlapping = geometry.contacts(self.state, -geometry.overlap)
+        if self.scene.simultaneous == "impulses":
+            near = geometry.contacts(self.state, geometry.touch)
+        overlapping = [c for c in near if c.distance < -geometry.overlap]
         if overlapping and self.status is None:
             c = overlapping[0]
             what = f"balls {c.i + 1} and {c.j + 1}" if c.kind == "pair" else f"ball {c.i + 1} and the cushion"

@@ -18,6 +18,8 @@ IMPACT_COLUMNS = (
     "boundary_s", "reflection_angle", "law_flag",
 )
 INTEGER_COLUMNS = ("n", "i", "j", "law_flag")
+#: Columns computed in float64 from the run's numbers, whatever the precision (17 digits in the CSV).
+DERIVED_COLUMNS = ("boundary_s", "reflection_angle")
 #: Raw record of an impact (run-type numbers): the table's columns from t to energy_after, then the
 #: contact point on the boundary and the cushion's outward normal (nan for a ball-ball impact), the flag.
 RECORD_FIELDS = IMPACT_COLUMNS[1:18] + ("px", "py", "nx", "ny", "law_flag")
@@ -29,7 +31,9 @@ def impact_table(scene: TableScene, records: list, precision: Precision, first_n
     on a quad or MPFR run). Empty cells are nan (float64) or None (object)."""
     wide = native and precision.name != "double"
     number = object if wide else np.float64
-    dtype = [(name, np.int64 if name in INTEGER_COLUMNS else number) for name in IMPACT_COLUMNS]
+    # boundary_s and reflection_angle are derived in float64 (for figures and maps) in every precision
+    dtype = [(name, np.int64 if name in INTEGER_COLUMNS else np.float64 if name in DERIVED_COLUMNS else number)
+             for name in IMPACT_COLUMNS]
     table = np.zeros(len(records), dtype=dtype)
     if not records:
         return table
@@ -65,8 +69,8 @@ def impact_table(scene: TableScene, records: list, precision: Precision, first_n
             column[cushion] = empty
         else:
             table[name][cushion] = np.nan
-    table["boundary_s"] = s if not wide else [None if np.isnan(v) else v for v in s]
-    table["reflection_angle"] = angle if not wide else [None if np.isnan(v) else v for v in angle]
+    table["boundary_s"] = s
+    table["reflection_angle"] = angle
     return table
 
 

@@ -69,28 +69,29 @@ def offset_coefficients(B, r, A=1):
     return tuple(q[m] for m in OFFSET_MONOMIALS)
 
 
-def offset_polynomial(u, v, q):
-    """sum q_ij u^i v^j by Horner's rule in v, then u."""
-    total = None
-    k = len(OFFSET_MONOMIALS)
-    for i in range(4, -1, -1):
-        row = None
-        for j in range(4 - i, -1, -1):
-            c = q[OFFSET_MONOMIALS.index((i, j))]
-            row = c if row is None else row * v + c
-        total = row if total is None else total * u + row
-    del k
+#: Positions in ``OFFSET_MONOMIALS`` of q_i0, q_i1, ... for each power i of u.
+_ROWS = tuple(tuple(OFFSET_MONOMIALS.index((i, j)) for j in range(5 - i)) for i in range(5))
+
+
+def _horner(coefficients, x):
+    total = coefficients[-1]
+    for c in coefficients[-2::-1]:
+        total = total * x + c
     return total
 
 
+def offset_polynomial(u, v, q):
+    """sum q_ij u^i v^j by Horner's rule in v, then u."""
+    rows = [_horner([q[m] for m in row], v) for row in _ROWS]
+    return _horner(rows, u)
+
+
 def _offset_partials(u, v, q):
-    """(dQ/du, dQ/dv)."""
-    du = dv = 0
-    for (i, j), c in zip(OFFSET_MONOMIALS, q):
-        if i:
-            du = du + i * c * u ** (i - 1) * v**j
-        if j:
-            dv = dv + j * c * u**i * v ** (j - 1)
+    """(dQ/du, dQ/dv), by Horner's rule on the derivative's coefficients."""
+    rows = [_horner([q[m] for m in row], v) for row in _ROWS]
+    du = _horner([i * rows[i] for i in range(1, 5)], u)
+    drows = [_horner([j * q[row[j]] for j in range(1, len(row))], v) for row in _ROWS[:4]]
+    dv = _horner(drows, u)
     return du, dv
 
 
@@ -136,7 +137,7 @@ class EllipseBoundary:
         du, dv = _offset_partials(c[0] * x * x, c[0] * y * y, c[1:])
         return 2 * c[0] * x * du, 2 * c[0] * y * dv
 
-    def exact_distance(self, x, y, a2, b2, zero):
+    def exact_distance(self, x, y, a2, b2, zero, guess=None, tol=None):
         """(distance of (x, y) from the ellipse, outward unit normal there) in the numbers' own type.
 
         Well conditioned where the gap polynomial is not (for a small ball its
@@ -145,7 +146,9 @@ class EllipseBoundary:
         it. The nearest point is (a^2 x/(a^2 + l), b^2 y/(b^2 + l)) with l the
         root in (-min(a^2, b^2), 0) of a^2 x^2/(a^2 + l)^2 + b^2 y^2/(b^2 + l)^2 = 1,
         a decreasing convex function of l there: Newton's method kept inside a
-        bracket. None for a point not inside the ellipse.
+        bracket, from ``guess`` (about -R/|(x/a^2, y/b^2)| for a point at distance R), until a
+        step is below ``tol`` relative (one more Newton step then: quadratic convergence).
+        None for a point not inside the ellipse.
         """
         xx, yy = a2 * x * x, b2 * y * y
 
@@ -156,20 +159,27 @@ class EllipseBoundary:
         if not phi(zero)[0] < zero:
             return None
         lo, hi = -(a2 if a2 < b2 else b2), zero
-        lam = hi
+        lam = guess if guess is not None and lo < guess < hi else hi
+        previous = None
         for _ in range(200):
             value, slope = phi(lam)
+            if value == zero:  # on the root
+                break
             if value > zero:
                 lo = lam
             else:
                 hi = lam
-            step = value / slope
-            new = lam - step
+            new = lam - value / slope
             if not lo < new < hi:
                 new = (lo + hi) / 2
-            if new == lam:
+            step = abs(new - lam)
+            # in Newton's quadratic regime (steps shrinking) a step below sqrt(eps) leaves an error ~eps
+            # (near the pole at -min(a^2, b^2) steps are small but growing: not converged)
+            done = new == lam or (tol is not None and previous is not None and step <= tol * abs(lam)
+                                  and step < previous / 2)
+            lam, previous = new, step
+            if done:
                 break
-            lam = new
         fx, fy = a2 * x / (a2 + lam), b2 * y / (b2 + lam)
         dx, dy = fx - x, fy - y
         d = sqrt(dx * dx + dy * dy)
