@@ -6,6 +6,10 @@ Public API (everything else is private and may change):
     result = heyroll.simulate(scene)
     table = result.collision_table()              # numpy structured array
 
+A billiard table (paper section 7) is a ``TableScene`` (``[track] type = "table"``
+in a scene file, or ``TableScene.make(EllipseBoundary(a, b), [TableBall.make(...)])``);
+``simulate`` runs it on the same engine and returns a ``TableResult``.
+
 Layers, with one-way imports: ``heyroll.model`` (bodies, tracks, laws) ->
 ``heyroll.simulation`` (heyoka systems, events, driver, results) ->
 ``heyroll.interfaces`` (scene files, CLI, figures, reports).
@@ -19,6 +23,8 @@ from .model.laws import CollisionLaw, GeneralizedNewtonLaw, HedrihRollingLaw, Ne
 from .model.frame import Frame
 from .model.scene import RunSettings, Scene
 from .model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment, ThreeArcTrack, Track
+from .model.table import (CircleBoundary, EllipseBoundary, PolygonBoundary, RectangleBoundary, TableBall,
+                          TableScene)
 
 # The simulation and interface layers load heyoka and matplotlib: import them
 # on first use, so that the model layer works (and imports fast) without them.
@@ -26,6 +32,9 @@ _LAZY = {
     "simulate": ("heyroll.simulation.driver", "simulate"),
     "Precision": ("heyroll.simulation.precision", "Precision"),
     "SimulationResult": ("heyroll.simulation.result", "SimulationResult"),
+    "TableResult": ("heyroll.simulation.table.result", "TableResult"),
+    "IMPACT_COLUMNS": ("heyroll.simulation.table.result", "IMPACT_COLUMNS"),
+    "periodic_orbits": ("heyroll.analysis.billiard_orbits", "periodic_orbits"),
     "Status": ("heyroll.simulation.result", "Status"),
     "TABLE_COLUMNS": ("heyroll.simulation.result", "TABLE_COLUMNS"),
     "RunOptions": ("heyroll.simulation.driver", "RunOptions"),
@@ -51,6 +60,15 @@ def __getattr__(name):
 
 __all__ = [
     "ArcChainTrack",
+    "CircleBoundary",
+    "EllipseBoundary",
+    "IMPACT_COLUMNS",
+    "PolygonBoundary",
+    "RectangleBoundary",
+    "TableBall",
+    "TableResult",
+    "TableScene",
+    "periodic_orbits",
     "Body",
     "CurveTrack",
     "EquilibriumProblem",

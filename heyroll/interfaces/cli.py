@@ -312,7 +312,17 @@ def _writable(out: Path) -> None:
 def _path_scene(path: str, command: str) -> Scene:
     """The scene of ``heyroll equilibria`` / ``portrait``: any track (on a circle the
     coordinate is phi in [-pi, pi), periodic, with no limiters)."""
-    return load_scene(path)
+    return _not_a_table(load_scene(path), command)
+
+
+def _not_a_table(scene, command: str):
+    """A scene for a command of the vertical-plane tracks: a billiard table is refused in one line."""
+    if getattr(scene, "kind", None) == "table":
+        hint = ("its impacts are checked against the mpmath reference in tests/test_billiards.py and "
+                "validation/billiards.py" if command == "validate" else "try: heyroll billiard orbits")
+        raise BadInput("scene", f"heyroll {command} works on tracks in a vertical plane, not on a billiard table "
+                                f"({hint})")
+    return scene
 
 
 def _body_number(text: str, scene: Scene) -> int:
@@ -409,7 +419,7 @@ def _validate(args) -> int:
     collisions = _collision_count(args.collisions, "--collisions")
     if collisions < 1:
         raise BadInput("--collisions", "must be >= 1")
-    scene = load_scene(args.scene) if args.scene else default_scene()
+    scene = _not_a_table(load_scene(args.scene) if args.scene else default_scene(), "validate")
     out = _out_dir(args.out)
     _writable(out)
     from .report import validate

@@ -207,6 +207,9 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
         precision = table.get("precision") if precision is None else precision
     if not isinstance(data.get("bodies"), list) or not data["bodies"] or not isinstance(data.get("track"), dict):
         raise SweepError("scene", "a sweep needs a scene with a [track] table and [[bodies]]")
+    if data["track"].get("type") == "table":
+        raise SweepError("track.type", "sweeps of billiard tables are not supported yet: run each scene with "
+                                       "heyroll run (or simulate() in a loop)")
     if not grid and not random:
         raise SweepError("--vary", "nothing to sweep: give --vary KEY=START:STOP:N, --values KEY=v1,v2 or --random KEY=LO:HI")
     if grid and random:

@@ -81,3 +81,14 @@ def unit_normal(gx, gy):
     """The unit vector along (gx, gy) in the numbers' own type."""
     norm = sqrt(gx * gx + gy * gy)
     return gx / norm, gy / norm
+
+
+def positive_length(boundary, name: str) -> None:
+    """Make ``boundary.name`` an mpmath number at model precision, refusing one that is not > 0."""
+    from ....errors import SceneError
+    from ..._numbers import is_finite, to_mpf
+
+    value = getattr(boundary, name)
+    if not is_finite(value) or not to_mpf(value) > 0:
+        raise SceneError(f"track.{name}", f"must be a finite number > 0, got {value!r}")
+    object.__setattr__(boundary, name, to_mpf(value))

@@ -10,6 +10,7 @@ import numpy as np
 
 from ....errors import SceneError
 from ..._numbers import workprec
+from .base import positive_length as _positive_length
 
 
 @dataclass(frozen=True)
@@ -17,6 +18,9 @@ class CircleBoundary:
     radius: mpmath.mpf
 
     kind: ClassVar[str] = "circle"
+
+    def __post_init__(self):
+        _positive_length(self, "radius")
 
     def check_ball(self, radius, field: str) -> None:
         if radius >= self.radius:

@@ -33,6 +33,7 @@ import numpy as np
 
 from ....errors import SceneError
 from ..._numbers import workprec
+from .base import positive_length as _positive_length
 from .base import sqrt
 
 #: (i, j) of the coefficient of u^i v^j, in the order of ``offset_coefficients``.
@@ -101,6 +102,10 @@ class EllipseBoundary:
     b: mpmath.mpf
 
     kind: ClassVar[str] = "ellipse"
+
+    def __post_init__(self):
+        _positive_length(self, "a")
+        _positive_length(self, "b")
 
     def check_ball(self, radius, field: str) -> None:
         with workprec():
