@@ -9,10 +9,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from ...model.table import TableScene
 from ...model.table.boundaries import sqrt
 from ..precision import Precision
 from .system import STATE_PER_BALL, TableSystem
+
+
+#: Pairs and walls from which a double run checks its contacts with numpy (one pass) rather than one by one.
+VECTOR_CONTACTS = 24
 
 
 @dataclass(frozen=True)
@@ -44,6 +50,7 @@ class ContactGeometry:
         #: beyond this a contact overlaps: an impact was missed
         self.overlap = num(2.0**20 * precision.epsilon * size)
         self.zero = num(0)
+        self.vector = None
         #: Newton's method on the foot point stops one step after a relative step this small
         self.newton_tol = num(2.0**-((precision.bits + 1) // 2))
         #: balls whose cushion impacts are polished with the boundary's exact distance (ellipse, R > 0)
@@ -52,6 +59,7 @@ class ContactGeometry:
             for k, ball in enumerate(scene.balls):
                 if not self.boundary.conic(ball.body.radius):
                     self.exact[k] = (num(self.boundary.a ** 2), num(self.boundary.b ** 2), num(ball.body.radius))
+        self.vector = self._vectorized(precision)
 
     def wall(self, k, w, x, y) -> tuple:
         """(distance, outward unit normal) of ball k's centre from wall w (first order: g/|grad g|)."""
@@ -87,6 +95,8 @@ class ContactGeometry:
 
     def contacts(self, state, within) -> list:
         """Every contact closer than ``within`` (pairs first, in scene order, then walls by ball)."""
+        if self.vector is not None:
+            return self._contacts_float64(state, within)
         out = []
         n = self.system.n_balls
         for i in range(n):
@@ -99,6 +109,63 @@ class ContactGeometry:
             if d <= within:
                 out.append(Contact("wall", k, w, nrm, d))
         return out
+
+    def _vectorized(self, precision: Precision):
+        """Arrays for :meth:`_contacts_float64` (double runs: one numpy pass over all pairs and walls)."""
+        n = self.system.n_balls
+        if precision.name != "double" or n * (n - 1) // 2 + len(self.system.walls) < VECTOR_CONTACTS:
+            return None
+        first, second = np.triu_indices(n, 1)
+        reach = np.array([float(self.system.pairs[(int(i), int(j))][1]) for i, j in zip(first, second)])
+        walls = {}
+        for (k, w), (_, values) in self.system.walls.items():
+            walls.setdefault(w, []).append((k, [float(v) for v in values]))
+        if hasattr(self.boundary, "vertices"):  # straight walls: distance = h_e - R - n_e . c, one matrix
+            normals = np.array([[walls[w][0][1][0], walls[w][0][1][1]] for w in sorted(walls)])
+            offsets = np.empty((n, len(walls)))
+            for w in sorted(walls):
+                for k, c in walls[w]:
+                    offsets[k, w] = c[2]
+            return first, second, reach, ("straight", normals, offsets)
+        per_wall = {}
+        for w, entries in walls.items():
+            if len({len(c) for _, c in entries}) != 1:  # mixed particles and balls (ellipse): per length
+                return None
+            balls = np.array([k for k, _ in entries])
+            constants = [np.array([c[m] for _, c in entries]) for m in range(len(entries[0][1]))]
+            per_wall[w] = (balls, constants)
+        return first, second, reach, per_wall
+
+    def _contacts_float64(self, state, within) -> list:
+        first, second, reach, per_wall = self.vector
+        s = np.asarray(state, dtype=float).reshape(-1, STATE_PER_BALL)
+        out = []
+        if len(first):
+            dx, dy = s[second, 0] - s[first, 0], s[second, 1] - s[first, 1]
+            d = np.hypot(dx, dy)
+            distance = d - reach
+            for m in np.flatnonzero(distance <= within):
+                out.append(Contact("pair", int(first[m]), int(second[m]), (dx[m] / d[m], dy[m] / d[m]),
+                                   distance[m]))
+        walls = []
+        if isinstance(per_wall, tuple):  # straight walls
+            _, normals, offsets = per_wall
+            distance = offsets - s[:, 0:1] * normals[:, 0] - s[:, 1:2] * normals[:, 1]
+            for k, w in zip(*np.nonzero(distance <= within)):
+                walls.append(Contact("wall", int(k), int(w), (normals[w, 0], normals[w, 1]), distance[k, w]))
+            return out + walls
+        for w, (balls, constants) in per_wall.items():
+            x, y = s[balls, 0], s[balls, 1]
+            g = self.boundary.gap(w, x, y, constants)
+            gx, gy = self.boundary.gradient(w, x, y, constants)
+            gx, gy = np.broadcast_to(gx, g.shape), np.broadcast_to(gy, g.shape)
+            norm = np.hypot(gx, gy)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                distance = np.where(norm > 0, -g / norm, np.inf)
+            for m in np.flatnonzero(distance <= within):
+                walls.append(Contact("wall", int(balls[m]), w, (gx[m] / norm[m], gy[m] / norm[m]), distance[m]))
+        walls.sort(key=lambda c: (c.i, c.j))
+        return out + walls
 
     def approach(self, contact: Contact, state):
         """Closing speed of a contact (> 0: approaching)."""
