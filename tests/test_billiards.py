@@ -430,3 +430,56 @@ def test_bad_table_input_is_one_line_exit_2_nothing_written(tmp_path, old, new, 
 def test_overlapping_balls_are_refused():
     with pytest.raises(SceneError, match=r"bodies\[2\]"):
         table_scene(ELLIPSE, [ball("0", "0", "1", "0"), ball("0.15", "0", "0", "0")])
+
+
+def test_a_break_of_sixteen_balls_keeps_momentum_and_energy_and_never_overlaps():
+    """A cue ball into a rack of 15 touching balls in a rectangle (the numpy contact pass of many balls)."""
+    r = 0.028575
+    balls = [ball("-0.6", "0.0", "3.0", "0.0", radius=repr(r))]
+    for row in range(5):
+        for m in range(row + 1):
+            spread = 1 + 1e-9  # touching up to a gap of ~1e-10 m: the impacts come one by one, as in a real break
+            balls.append(ball(repr(0.3 + row * math.sqrt(3) * r * spread), repr((m - row / 2) * 2 * r * spread), "0",
+                              "0", radius=repr(r)))
+    scene = table_scene('boundary = "rectangle"\nwidth = 2.54\nheight = 1.27', balls, law="newton", t_end=0.4)
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED, result.message
+    state = np.array(result.state_final, dtype=float).reshape(16, 6)
+    table = result.collision_table()
+    before_walls = table["t"] < table[table["j"] == 0]["t"].min() if (table["j"] == 0).any() else np.ones(len(table), bool)
+    assert before_walls.sum() > 15  # the break itself
+    if not (table["j"] == 0).any():
+        assert np.allclose(state[:, 2:4].sum(axis=0), [3.0, 0.0], atol=1e-13)
+    assert result.energy_final == pytest.approx(result.energy_initial, rel=1e-13)
+    # no two balls closer than their radii, no ball outside the cushion's reach
+    xy = state[:, :2]
+    d = np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1))
+    assert np.all(d[np.triu_indices(16, 1)] >= 2 * r * (1 - 1e-12))
+    assert np.all(np.abs(xy[:, 0]) <= 1.27 - r + 1e-12) and np.all(np.abs(xy[:, 1]) <= 0.635 - r + 1e-12)
+
+
+def test_ctrl_c_leaves_a_complete_table_and_summary(tmp_path):
+    import signal
+    import time
+
+    path = write(tmp_path, TABLE.replace("t_end = 20.0", "t_end = 1e9").replace("max_collisions = 10000",
+                                                                                 "max_collisions = 1000000000"))
+    proc = subprocess.Popen([sys.executable, "-m", "heyroll.interfaces.cli", "run", str(path), "--out",
+                             str(tmp_path / "out"), "--no-figures", "--progress", "off"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.time() + 60
+    while time.time() < deadline and not list(tmp_path.glob("out/.collisions.csv.tmp")):
+        time.sleep(0.2)
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    import json
+
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"] == "interrupted"
+    with open(tmp_path / "out" / "collisions.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == summary["collisions"] > 0
+    assert all(len(r) == len(rows[0]) and r["reflection_angle"] != "" for r in rows)
