@@ -483,3 +483,16 @@ def test_ctrl_c_leaves_a_complete_table_and_summary(tmp_path):
         rows = list(csv.DictReader(f))
     assert len(rows) == summary["collisions"] > 0
     assert all(len(r) == len(rows[0]) and r["reflection_angle"] != "" for r in rows)
+
+
+@pytest.mark.parametrize("name", ["elliptical_billiard", "cut_shot", "newtons_cradle"])
+def test_the_table_examples_run(name):
+    from heyroll.interfaces.scene_file import load_scene
+
+    scene = load_scene(ROOT / "examples" / f"{name}.toml")
+    result = simulate(scene, t_end=min(float(scene.run.t_end), 20.0))
+    assert result.status.success, result.message
+    assert result.n_collisions > 0
+    if name == "newtons_cradle":
+        v = [result.state_final[6 * k + 2] for k in range(4)]
+        assert v[3] == pytest.approx(1.0, abs=1e-15) and max(abs(x) for x in v[:3]) < 1e-15 or v[3] < 0
