@@ -285,6 +285,11 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
         from .figures import run_figures
 
         files.update(run_figures(result, out_dir))
+    return _write_summary(result, out_dir, scene_source, files, sink)
+
+
+def _write_summary(result, out_dir: Path, scene_source: str, files: dict, sink) -> dict:
+    """summary.json of a run (every track) whose table ``sink`` wrote; returns the summary."""
     summary = summary_dict(result, scene_source=scene_source, files=files)
     summary["table_format"] = sink.format
     summary["table_rows"] = sink.rows
@@ -304,11 +309,7 @@ def _write_table_run(result, out_dir: Path, *, scene_source: str, figures: bool,
         from .table_figures import table_figures
 
         files.update(table_figures(result, out_dir))
-    summary = summary_dict(result, scene_source=scene_source, files=files)
-    summary["table_format"] = sink.format
-    summary["table_rows"] = sink.rows
-    atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2, allow_nan=True) + "\n")
-    return summary
+    return _write_summary(result, out_dir, scene_source, files, sink)
 
 
 def strobe_table(result: SimulationResult) -> np.ndarray:

@@ -70,3 +70,25 @@ def after_impact(v, u, n, vn_new, keeps_rolling: bool, particle: bool):
     if keeps_rolling:
         return v_new, u
     return v_new, (u[0] + v_new[0] - v[0], u[1] + v_new[1] - v[1])
+
+
+class NormalImpulseLaw:
+    """A ball law that is a one-dimensional law along the line of centres (eqs. 10-11), compiled once
+    per pair into an impulse map on the normal centre velocities (sigma = 1): Hedrih's, Newton's.
+
+    Subclasses name the one-dimensional law (``heyroll.model.laws``) in ``one_dimensional``.
+    """
+
+    def one_dimensional(self):
+        raise NotImplementedError
+
+    def constants(self, body_i, body_j, number) -> tuple:
+        from ...laws import impulse_map
+
+        m = impulse_map(self.one_dimensional(), body_i, body_j, 1, 1)
+        return number(m.q), number(m.a_i), number(m.a_j)
+
+    def normal_rates(self, c, vn_i, vn_j):
+        # D = vn_i - q vn_j; vn_i+ = vn_i - a_i D, vn_j+ = vn_j + a_j D (see heyroll.model.laws.base.ImpulseMap)
+        d = vn_i - c[0] * vn_j
+        return vn_i - c[1] * d, vn_j + c[2] * d

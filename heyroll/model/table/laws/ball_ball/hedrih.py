@@ -15,12 +15,13 @@ from typing import ClassVar
 
 import mpmath
 
-from ....laws import HedrihRollingLaw, impulse_map
+from ....laws import HedrihRollingLaw
+from ..base import NormalImpulseLaw
 from ....laws.base import check_restitution
 
 
 @dataclass(frozen=True)
-class HedrihTableLaw:
+class HedrihTableLaw(NormalImpulseLaw):
     name: ClassVar[str] = "hedrih"
     source: ClassVar[str] = "Hedrih's rolling-collision law (eqs. 8-15) on the normal rolling rates v.n/R"
     keeps_rolling: ClassVar[bool] = True
@@ -31,12 +32,3 @@ class HedrihTableLaw:
 
     def one_dimensional(self):
         return HedrihRollingLaw(restitution=self.restitution)
-
-    def constants(self, body_i, body_j, number) -> tuple:
-        m = impulse_map(self.one_dimensional(), body_i, body_j, 1, 1)
-        return number(m.q), number(m.a_i), number(m.a_j)
-
-    def normal_rates(self, c, vn_i, vn_j):
-        # eqs. (10)-(11) on omega = vn/R, written on vn (see heyroll.model.laws.base.ImpulseMap)
-        d = vn_i - c[0] * vn_j
-        return vn_i - c[1] * d, vn_j + c[2] * d

@@ -13,12 +13,13 @@ from typing import ClassVar
 
 import mpmath
 
-from ....laws import NewtonCentreLaw, impulse_map
+from ....laws import NewtonCentreLaw
+from ..base import NormalImpulseLaw
 from ....laws.base import check_restitution
 
 
 @dataclass(frozen=True)
-class NewtonTableLaw:
+class NewtonTableLaw(NormalImpulseLaw):
     name: ClassVar[str] = "newton"
     source: ClassVar[str] = "Newton's law of central collision (eqs. 1-5) on the centre velocities' normal parts"
     keeps_rolling: ClassVar[bool] = True
@@ -29,11 +30,3 @@ class NewtonTableLaw:
 
     def one_dimensional(self):
         return NewtonCentreLaw(restitution=self.restitution)
-
-    def constants(self, body_i, body_j, number) -> tuple:
-        m = impulse_map(self.one_dimensional(), body_i, body_j, 1, 1)
-        return number(m.q), number(m.a_i), number(m.a_j)
-
-    def normal_rates(self, c, vn_i, vn_j):
-        d = vn_i - c[0] * vn_j
-        return vn_i - c[1] * d, vn_j + c[2] * d
