@@ -22,7 +22,6 @@ import pytest
 from heyroll.errors import SceneError
 from heyroll.interfaces.scene_file import parse_scene
 from heyroll.model.table import EllipseBoundary
-from heyroll.model.table.boundaries.ellipse import offset_polynomial
 from heyroll.reference.billiard import _cushion_time, reference_impacts
 from heyroll.simulation.driver import simulate
 from heyroll.simulation.result import Status
