@@ -319,9 +319,10 @@ def test_symmetric_starts_resolve_every_pair_at_the_same_instant():
     """Four balls launched at the centre meet at one instant: no overlap, momentum zero, energy kept."""
     s = 0.5
     balls = [ball(repr(x), repr(y), repr(-x), repr(-y)) for x, y in ((s, 0), (0, s), (-s, 0), (0, -s))]
-    scene = table_scene('boundary = "circle"\nradius = 1.0', balls, law="newton", t_end=3)
+    scene = table_scene('boundary = "circle"\nradius = 1.0', balls, law="newton", t_end=1.5)  # before the cushion
     result = simulate(scene)
     assert result.status is Status.COMPLETED
+    assert result.n_collisions >= 2 and result.n_cushion == 0
     state = np.array(result.state_final, dtype=float).reshape(4, 6)
     assert np.allclose(state[:, 2:4].sum(axis=0), 0, atol=1e-14)
     assert result.energy_final == pytest.approx(result.energy_initial, rel=1e-14)
@@ -497,3 +498,19 @@ def test_the_table_examples_run(name):
         first = table[table["t"] == table["t"][0]]
         assert [(r["i"], r["j"]) for r in first] == [(1, 2), (2, 3), (3, 4)]
         assert first["vx_j_after"][-1] == 1.0 and first["vx_i_after"][-1] == 0.0
+
+
+def test_a_ball_settling_onto_a_curved_cushion_stops_the_run_with_its_reason():
+    """k < 1 in a convex table: the reflection angle shrinks by k each time, impacts accumulate (Zeno)."""
+    scene = table_scene('boundary = "circle"\nradius = 1.0', [ball("0.2", "0.1", "0.6", "0.9")], cushion_k="0.5",
+                        t_end=100)
+    result = simulate(scene)
+    assert result.status is Status.FAILED and "settles onto the cushion" in result.message
+    assert result.n_collisions > 5
+    with pytest.raises(SceneError, match="track.cushion_restitution"):
+        table_scene('boundary = "circle"\nradius = 1.0', [ball("0.2", "0.1", "0.6", "0.9")], cushion_k="0")
+    # on straight walls k = 0 is fine: the ball slides along the wall into the corner and stops there
+    square = table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 1.0', [ball("0.2", "0.1", "0.6", "0.9")],
+                         cushion_k="0", t_end=10)
+    result = simulate(square)
+    assert result.status is Status.COMPLETED and result.energy_final == 0

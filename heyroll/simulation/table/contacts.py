@@ -14,7 +14,7 @@ import numpy as np
 from ...model.table import TableScene
 from ...model.table.boundaries import sqrt
 from ..precision import Precision
-from .system import STATE_PER_BALL, TableSystem
+from .system import STATE_PER_BALL, TableSystem, _extent
 
 
 #: Pairs and walls from which a double run checks its contacts with numpy (one pass) rather than one by one.
@@ -43,7 +43,8 @@ class ContactGeometry:
         self.scene, self.system = scene, system
         self.boundary = scene.boundary
         num = precision.number
-        size = max(abs(float(v)) for v in _extent(scene))
+        size = max(abs(float(v)) for v in _extent(scene.boundary))
+        self.size = num(size)
         #: a contact "touches" within this distance: the event's root is exact to a few ulps; a
         #: symmetric start brings several contacts to the same instant up to round-off
         self.touch = num(2.0**12 * precision.epsilon * size)
@@ -175,12 +176,3 @@ class ContactGeometry:
             return vi[0] * nx + vi[1] * ny
         vj = state[STATE_PER_BALL * contact.j + 2], state[STATE_PER_BALL * contact.j + 3]
         return (vi[0] - vj[0]) * nx + (vi[1] - vj[1]) * ny
-
-
-def _extent(scene: TableScene):
-    b = scene.boundary
-    for name in ("a", "b", "radius", "width", "height"):
-        if hasattr(b, name):
-            yield getattr(b, name)
-    for vertex in getattr(b, "vertices", ()):
-        yield from vertex

@@ -42,6 +42,10 @@ class Boundary(Protocol):
         """Gap function of ``wall`` at centre (x, y) with constants ``c``: < 0 inside, 0 at contact."""
         ...
 
+    def gap_scale(self, wall: int, c):
+        """Magnitude of the gap function's terms at the wall: its round-off is a few ulps of this."""
+        ...
+
     def gradient(self, wall: int, x, y, c) -> tuple:
         """(dg/dx, dg/dy): points out of the table; its direction is the cushion's outward normal."""
         ...

@@ -37,8 +37,15 @@ class CircleBoundary:
     def gap(self, wall, x, y, c):
         return x * x + y * y - c[0]
 
+    def gap_scale(self, wall, c):
+        """Magnitude of the gap function's terms at the wall (its round-off is a few ulps of this)."""
+        return c[0]
+
     def gradient(self, wall, x, y, c):
         return 2 * x, 2 * y
+
+    def least_curvature_radius(self, radius) -> float:
+        return float(self.radius - radius)
 
     def centre_curve(self, radius, theta):
         """(x, y, dx/dtheta, dy/dtheta) of the curve a ball's centre reaches, theta in [0, 2 pi) (numpy)."""

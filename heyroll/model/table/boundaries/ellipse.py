@@ -136,6 +136,12 @@ class EllipseBoundary:
             return c[0] * x * x + c[1] * y * y - 1
         return offset_polynomial(c[0] * x * x, c[0] * y * y, c[1:])
 
+    def gap_scale(self, wall, c):
+        """Magnitude of the gap function's terms at the wall (its round-off is a few ulps of this)."""
+        if len(c) == 2:
+            return 1
+        return sum(abs(v) for v in c[1:])
+
     def gradient(self, wall, x, y, c):
         if len(c) == 2:
             return 2 * c[0] * x, 2 * c[1] * y
@@ -203,6 +209,10 @@ class EllipseBoundary:
             if abs(coef[m // 4]) < 1e-18 * coef[0] or m >= 2**22:
                 return coef[: m // 4]
             m *= 4
+
+    def least_curvature_radius(self, radius) -> float:
+        """The least radius of curvature of the curve of the centre: b^2/a - R at the ends of the major axis."""
+        return float(min(self.a, self.b) ** 2 / max(self.a, self.b) - radius)
 
     def centre_curve(self, radius, theta):
         """(x, y, dx/dtheta, dy/dtheta) of P(theta) - R n(theta), the curve a ball's centre reaches (numpy)."""

@@ -95,6 +95,10 @@ class PolygonBoundary:
     def gap(self, wall, x, y, c):
         return c[0] * x + c[1] * y - c[2]
 
+    def gap_scale(self, wall, c):
+        """Magnitude of the gap function's terms at the wall (its round-off is a few ulps of this)."""
+        return abs(c[2]) + abs(self.vertices[wall][0]) + abs(self.vertices[wall][1])
+
     def gradient(self, wall, x, y, c):
         return c[0], c[1]
 
