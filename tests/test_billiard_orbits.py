@@ -72,3 +72,23 @@ def test_the_cli_lists_orbits_and_refuses_bad_periods(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "billiard", "orbits", str(path),
                           "--period", "1"], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--period" in bad.stderr
+
+
+def test_the_birkhoff_portrait_of_a_circle_keeps_each_launch_at_one_angle(tmp_path):
+    """In a circular table every reflection angle of a launch is the same (angular momentum about the centre)."""
+    from heyroll.analysis.billiard_portrait import birkhoff_portrait
+
+    scene = table_scene('boundary = "circle"\nradius = 1.0', [ball("0.2", "0.1", "0.6", "0.9")])
+    launches = birkhoff_portrait(scene, runs=5, impacts=50)
+    for run in launches:
+        assert run["status"] == "max_collisions" and len(run["s"]) == 50
+        assert np.ptp(run["sin_angle"]) < 1e-12
+        assert run["sin_angle"][0] == pytest.approx(run["p"], abs=1e-8)
+    path = write(tmp_path, TABLE)
+    out = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "billiard", "portrait", str(path),
+                          "--runs", "3", "--impacts", "20", "--out", str(tmp_path / "bp")], capture_output=True,
+                         text=True)
+    assert out.returncode == 0, out.stderr
+    rows = (tmp_path / "bp" / "birkhoff_portrait.csv").read_text().splitlines()
+    assert rows[0] == "run,theta,p,n,boundary_s,sin_reflection_angle" and len(rows) == 1 + 3 * 20
+    assert (tmp_path / "bp" / "birkhoff_portrait.png").stat().st_size > 0

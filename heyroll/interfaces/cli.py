@@ -116,6 +116,12 @@ def build_parser() -> argparse.ArgumentParser:
     orb.add_argument("--rotation", default="1", help="rotation number p of p/period (default 1)")
     orb.add_argument("--ball", default="1", help="which ball's radius sets the curve of its centre (default 1)")
     orb.add_argument("--json", action="store_true", help="print a JSON array of orbits")
+    bpo = bsub.add_parser("portrait", help="the Birkhoff map of many launches of one ball, coloured by launch")
+    bpo.add_argument("scene", help="table scene file (TOML, track type = \"table\")")
+    bpo.add_argument("--runs", default="12", help="launches (default 12), spread over the cushion and the angle")
+    bpo.add_argument("--impacts", default="300", help="cushion impacts per launch (default 300)")
+    bpo.add_argument("--ball", default="1", help="which ball (alone on the table; default 1)")
+    bpo.add_argument("--out", default="heyroll-birkhoff", help="output directory (default: heyroll-birkhoff)")
     _add_sweep_parsers(sub)
     show = sub.add_parser("default-scene", help="print the built-in default scene as TOML")
     show.set_defaults()
@@ -145,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "plot":
             return _plot(args)
         if args.command == "billiard":
-            return _billiard_orbits(args)
+            return _billiard_orbits(args) if args.billiard_command == "orbits" else _billiard_portrait(args)
         return _run(args)
     except SceneError as exc:
         print(f"heyroll: error: {exc}", file=sys.stderr)
@@ -330,6 +336,34 @@ def _body_number(text: str, scene: Scene) -> int:
     if not 1 <= n <= len(scene.bodies):
         raise BadInput("--body", f"must be in 1..{len(scene.bodies)}, got {n}")
     return n - 1
+
+
+def _billiard_portrait(args) -> int:
+    from ..analysis.billiard_portrait import birkhoff_portrait
+    from .outputs import atomic_write_text
+    from .table_figures import portrait_figure
+
+    runs = _collision_count(args.runs, "--runs")
+    impacts = _collision_count(args.impacts, "--impacts")
+    ball = _collision_count(args.ball, "--ball")
+    scene = load_scene(args.scene)
+    if getattr(scene, "kind", None) != "table":
+        raise BadInput("scene", 'billiard portrait needs a table scene ([track] type = "table")')
+    out = _out_dir(args.out)
+    _writable(out)
+    launches = birkhoff_portrait(scene, runs, impacts, ball)
+    lines = ["run,theta,p,n,boundary_s,sin_reflection_angle"]
+    for k, run in enumerate(launches, start=1):
+        lines += [f"{k},{run['theta']:.17g},{run['p']:.17g},{n},{s:.17g},{q:.17g}"
+                  for n, (s, q) in enumerate(zip(run["s"], run["sin_angle"]), start=1)]
+    atomic_write_text(out / "birkhoff_portrait.csv", "\n".join(lines) + "\n")
+    portrait_figure(scene, launches, out / "birkhoff_portrait.png")
+    stopped = [f"{k}: {run['status']}" for k, run in enumerate(launches, start=1)
+               if run["status"] not in ("max_collisions", "completed")]
+    print(f"{runs} launches of ball {ball}, {sum(len(r['s']) for r in launches)} cushion impacts"
+          + (f"; stopped early: {', '.join(stopped)}" if stopped else ""))
+    print(f"wrote {out}/birkhoff_portrait.png, {out}/birkhoff_portrait.csv")
+    return EXIT_OK
 
 
 def _billiard_orbits(args) -> int:

@@ -128,3 +128,22 @@ def _aspect(scene) -> float:
     bx, by = scene.boundary.outline()
     width, height = np.ptp(bx), np.ptp(by)
     return float(np.clip(height / width, 0.4, 1.5)) if width > 0 else 1.0
+
+
+def portrait_figure(scene, launches: list, path: Path) -> None:
+    """The Birkhoff map of many launches (heyroll.analysis.billiard_portrait), one colour per launch."""
+    import matplotlib
+
+    fig = Figure(figsize=(8, 5))
+    ax = fig.add_subplot()
+    cmap = matplotlib.colormaps["turbo"]
+    for k, run in enumerate(launches):
+        ax.plot(run["s"], run["sin_angle"], ".", ms=1.5, color=cmap((k + 0.5) / len(launches)))
+    ax.set_xlim(0, scene.boundary.perimeter())
+    ax.set_ylim(-1, 1)
+    ax.set_xlabel("boundary arc length s (m)")
+    ax.set_ylabel("sin(reflection angle)")
+    total = sum(len(run["s"]) for run in launches)
+    ax.set_title(f"Birkhoff map of {len(launches)} launches ({total} cushion impacts), one colour per launch\n"
+                 f"{scene.boundary.describe()}, ball radius {float(scene.balls[0].body.radius):.4g} m", fontsize=9)
+    _save(fig, path)

@@ -87,6 +87,7 @@ class _Run:
         self.paths: list = []
         self.status, self.message = None, ""
         self.fired = None
+        self.max_step = num(self.system.max_step)
         self.energy_initial = float(self.energy(self.state))
         self.options = options
         self.ta = None
@@ -111,7 +112,7 @@ class _Run:
         n_events = len(self.system.events)
         while self.status is None:
             before = ta.time
-            outcome = ta.propagate_until(self.t_end, max_steps=STEP_CHUNK)[0]
+            outcome = ta.propagate_until(self.t_end, max_steps=STEP_CHUNK, max_delta_t=self.max_step)[0]
             self.t = ta.time
             if outcome == time_limit:
                 self.pull()

@@ -27,6 +27,7 @@ slide (u . d + (1 - s), the constant 1 while it rolls).
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass
 
 import heyoka as hy
@@ -67,6 +68,9 @@ class TableSystem:
     #: heyoka's cooldown of every event (s): 2^12 ulps of the time a ball at the scene's top speed takes to
     #: cross the table, rounded to a power of 2 (it is compiled into the events)
     cooldown: float = 0.0
+    #: longest step (s): the time a ball at the top speed takes to cross the table; a step of the whole
+    #: run (the motion is a polynomial, heyoka would take one) made event detection fail (1e300 s)
+    max_step: float = float("inf")
 
     @property
     def n_balls(self) -> int:
@@ -101,22 +105,22 @@ def table_system(scene: TableScene, precision: Precision) -> TableSystem:
     events += [TableEvent("pair", i, j) for (i, j) in pairs]
     rolls = tuple(can_slide(scene, k) for k in range(n))
     events += [TableEvent("roll", k) for k in range(n) if rolls[k]]
-    cooldown = _cooldown(scene, precision)
+    crossing = _crossing_time(scene)
+    cooldown = 2.0 ** round(math.log2(2.0**12 * precision.epsilon * crossing))
     shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown)
     return TableSystem(events=tuple(events), walls=walls, pairs=pairs, pars=tuple(pars), rolls=rolls, shape=shape,
-                       cooldown=cooldown)
+                       cooldown=cooldown, max_step=crossing)
 
 
-def _cooldown(scene: TableScene, precision: Precision) -> float:
-    """See TableSystem.cooldown. No ball is ever faster than sqrt(2 E / m_min): no law adds energy."""
-    import math
+def _crossing_time(scene: TableScene) -> float:
+    """The time a ball at the top speed takes to cross the table (1 s if nothing moves).
 
+    No ball is ever faster than sqrt(2 E / m_min): no law adds energy."""
     energy = float(scene.energy())
     lightest = min(float(b.body.mass) for b in scene.balls)
     top_speed = math.sqrt(2 * energy / lightest) if energy > 0 else 0.0
-    size = max(abs(float(v)) for b in (scene.boundary,) for v in _extent(b))
-    crossing = size / top_speed if top_speed > 0 else 1.0
-    return 2.0 ** round(math.log2(2.0**12 * precision.epsilon * crossing))
+    size = max(abs(float(v)) for v in _extent(scene.boundary))
+    return size / top_speed if top_speed > 0 else 1.0
 
 
 def _extent(boundary):
