@@ -514,3 +514,22 @@ def test_a_ball_settling_onto_a_curved_cushion_stops_the_run_with_its_reason():
                          cushion_k="0", t_end=10)
     result = simulate(square)
     assert result.status is Status.COMPLETED and result.energy_final == 0
+
+
+def test_regressions_found_by_review():
+    """Newton's method on the foot point landing on a bracket end; constants at 53 bits in quad runs."""
+    ell = EllipseBoundary(mpmath.mpf(2), mpmath.mpf(1))
+    d, _ = ell.exact_distance(-1.3137518502318222, -0.30714794704282095, 4.0, 1.0, 0.0, -0.5668176139419914, 2.0**-27)
+    assert abs(d - 0.4) < 1e-15
+    scene = table_scene(ELLIPSE, [ball("1.4165877768793114", "-0.0962310802555661", "-0.9476787997412875",
+                                       "0.31922545719432815", radius="0.4", mass="1")], t_end=500)
+    assert simulate(scene).status is Status.COMPLETED  # was: overlap at t = 258.41
+    quad = table_scene('boundary = "ellipse"\na = 2.1\nb = 1.3', [ball("0.3", "-0.2", "1.0", "0.7")], t_end=50)
+    assert simulate(quad, precision="quad").status is Status.COMPLETED  # was: overlap after 1 impact
+    two = table_scene(ELLIPSE, [ball("0.3", "-0.2", "1.0", "0.7"), ball("-0.5", "0.2", "-0.3", "0.5")], t_end=100,
+                      max_collisions=17)
+    table = simulate(two, precision="quad").collision_table(native=True)
+    ref = reference_impacts(two, 17, dps=50)
+    with mpmath.workdps(50):
+        errors = [abs(mpmath.mpf(str(t)) - r.t) for t, r in zip(table["t"], ref)]
+    assert max(errors) < 1e-28  # the first ball-ball impact (16th) included: reach^2 at the model's precision

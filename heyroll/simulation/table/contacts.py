@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...model._numbers import workprec
 from ...model.table import TableScene
 from ...model.table.boundaries import sqrt
 from ..precision import Precision
@@ -59,7 +60,9 @@ class ContactGeometry:
         if hasattr(self.boundary, "exact_distance"):
             for k, ball in enumerate(scene.balls):
                 if not self.boundary.conic(ball.body.radius):
-                    self.exact[k] = (num(self.boundary.a ** 2), num(self.boundary.b ** 2), num(ball.body.radius))
+                    with workprec():  # a^2 at the model's precision (mpmath's global 53 bits broke quad runs)
+                        a2, b2 = self.boundary.a ** 2, self.boundary.b ** 2
+                    self.exact[k] = (num(a2), num(b2), num(ball.body.radius))
         self.vector = self._vectorized(precision)
 
     def wall(self, k, w, x, y) -> tuple:

@@ -12,6 +12,7 @@ import time
 
 import heyoka as hy
 
+from ...model._numbers import workprec
 from ...model.table import TableScene
 from ...model.table.boundaries import sqrt
 from ..driver import DEFAULT_MAX_EVENTS, RunOptions
@@ -62,11 +63,12 @@ class _Run:
         self.pars = list(self.system.pars)
         self.zero = num(0)
         self.mass = [num(b.body.mass) for b in scene.balls]
-        self.spin_inertia = [num(b.body.kappa - 1) for b in scene.balls]
-        mu_g = scene.friction * scene.g
-        self.slide_v = [num(mu_g) for _ in scene.balls]
-        self.slide_u = [num(mu_g * b.body.kappa / (b.body.kappa - 1)) if b.body.kappa > 1 else num(0)
-                        for b in scene.balls]
+        with workprec():  # model constants at the model's precision, rounded once to the run's type
+            self.spin_inertia = [num(b.body.kappa - 1) for b in scene.balls]
+            mu_g = scene.friction * scene.g
+            self.slide_v = [num(mu_g) for _ in scene.balls]
+            self.slide_u = [num(mu_g * b.body.kappa / (b.body.kappa - 1)) if b.body.kappa > 1 else num(0)
+                            for b in scene.balls]
         self.radius = [num(b.body.radius) for b in scene.balls]
         #: a slip within this fraction of its starting size has ended (re-roll events at one instant)
         self.slip_tolerance = num(2.0**10 * precision.epsilon)
@@ -419,6 +421,15 @@ class _Run:
     def finish(self, wall: float) -> TableResult:
         if self.status is None:
             self.stop(Status.INTERRUPTED, "interrupted before the run began")
+        if self.status.success:  # the guarantee ends with the run: nothing overlaps at its last instant either
+            overlapping = [c for c in self.geometry.contacts(self.state, self.geometry.touch)
+                           if c.distance < -self.geometry.overlap]
+            if overlapping:
+                c = overlapping[0]
+                what = f"balls {c.i + 1} and {c.j + 1}" if c.kind == "pair" else f"ball {c.i + 1} and the cushion"
+                self.status, self.message = Status.OVERLAP, (
+                    f"{what} overlap by {float(-c.distance):.3g} m at the end of the run (t = {float(self.t):.17g} s): "
+                    "an impact was missed")
         if self.sink is not None:
             self.flush()
             self.sink.close()

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from itertools import combinations
 
+from ...model._numbers import workprec
 from ...model.table import TableScene
 from ...model.table.laws import after_impact
 from ...model.table.laws.ball_ball.newton import NewtonTableLaw
@@ -60,7 +61,9 @@ class Resolver:
                 self.mobility.append(1 / num(ball.body.mass))
             else:
                 v = one_d().variables(ball.body, 1)
-                self.mobility.append(1 / num(v.inertia * v.scale))
+                with workprec():
+                    mu = v.inertia * v.scale
+                self.mobility.append(1 / num(mu))
 
     # -- one contact -------------------------------------------------------------------------
     def wall(self, state: list, k: int, normal) -> int:

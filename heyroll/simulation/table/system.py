@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import heyoka as hy
 
+from ...model._numbers import workprec
 from ...model.table import TableScene
 from ..compiled_cache import CompiledCache
 from ..precision import Precision
@@ -98,9 +99,11 @@ def table_system(scene: TableScene, precision: Precision) -> TableSystem:
     pairs = {}
     for i in range(n):
         for j in range(i + 1, n):
-            reach = scene.balls[i].body.radius + scene.balls[j].body.radius
+            with workprec():  # at the model's precision, not mpmath's global 53 bits (quad and MPFR runs)
+                reach = scene.balls[i].body.radius + scene.balls[j].body.radius
+                reach2 = reach * reach
             pairs[(i, j)] = (len(pars), num(reach))
-            pars.append(num(reach * reach))
+            pars.append(num(reach2))
     events = [TableEvent("wall", k, w) for (k, w) in walls]
     events += [TableEvent("pair", i, j) for (i, j) in pairs]
     rolls = tuple(can_slide(scene, k) for k in range(n))

@@ -181,6 +181,8 @@ class EllipseBoundary:
             else:
                 hi = lam
             new = lam - value / slope
+            if new == lam:  # Newton's step is below an ulp: converged (before the bracket test: lam may be an end)
+                break
             if not lo < new < hi:
                 new = (lo + hi) / 2
             step = abs(new - lam)
