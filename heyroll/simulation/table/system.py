@@ -43,6 +43,9 @@ BALL_PARS = 7
 STATE_PER_BALL = 6
 
 _INTEGRATORS = CompiledCache(16)
+#: Events beyond which the integrator is compiled in heyoka's compact mode: measured with 16 balls in a
+#: rectangle (184 events) 0.45 s to compile instead of 9.3 s, ~25% fewer impacts per second after.
+COMPACT_EVENTS = 150
 
 
 @dataclass(frozen=True)
@@ -188,4 +191,6 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
             base = BALL_PARS * k
             events.append(hy.t_event(ux * par[base + DX] + uy * par[base + DY] + (1. - par[base + SLIDING]),
                                      direction=negative, **typed))
+    if len(events) > COMPACT_EVENTS and "compact_mode" not in options:
+        options = dict(options, compact_mode=True)
     return hy.taylor_adaptive(equations, list(state), pars=list(system.pars), t_events=events, **options)
