@@ -533,3 +533,52 @@ def test_regressions_found_by_review():
     with mpmath.workdps(50):
         errors = [abs(mpmath.mpf(str(t)) - r.t) for t, r in zip(table["t"], ref)]
     assert max(errors) < 1e-28  # the first ball-ball impact (16th) included: reach^2 at the model's precision
+
+
+def test_second_review_regressions():
+    """Each found by an adversarial review: outside an ellipse, Hedrih under 'impulses', a skidding ball at a
+    rolling cushion, k = 0 with spin into a straight cushion, grazing under 'impulses', kappa = 1 spin."""
+    with pytest.raises(SceneError, match=r"bodies\[1\].x"):  # far outside: the polynomial's sign turns back
+        table_scene(ELLIPSE, [ball("3.0", "0", "-1", "0")])
+    touching = simulate(table_scene(ELLIPSE, [ball("1.9", "0", "-1", "0")], t_end=2))  # touching exactly
+    assert touching.status is Status.COMPLETED
+    along = simulate(table_scene(ELLIPSE, [ball("0", "0.9", "1", "0")], t_end=5))  # starts moving along it
+    assert along.status is Status.FAILED and "along the curved cushion" in along.message
+    pair = [ball("-0.5", "0", "1", "0", radius="0.1", mass="1"),
+            ball("0.5", "0.05", "0", "0", radius="0.2", mass="1", shape="ring")]
+    alone = simulate(table_scene('boundary = "circle"\nradius = 5.0', pair, simultaneous="impulses", t_end=1.5))
+    order = simulate(table_scene('boundary = "circle"\nradius = 5.0', pair, simultaneous="sequential", t_end=1.5))
+    assert alone.state_final == order.state_final  # one contact alone is the scene's law under either policy
+    assert alone.energy_final == pytest.approx(alone.energy_initial, rel=1e-14)
+    skid = dict(ball("0.8", "0", "1", "0", mass="1"), wx=0, wy=0)  # sliding into a rolling cushion, k = 1
+    rows = simulate(table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 1.0', [skid], law="newton",
+                                t_end=0.2)).collision_table()
+    assert rows["energy_after"][0] == pytest.approx(rows["energy_before"][0], rel=1e-14)
+    pressed = simulate(table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 1.0', [ball("0", "0", "1", "0.3")],
+                                   cushion="slide", cushion_k=0, t_end=10))
+    assert pressed.status is Status.FAILED and "pressed against the cushion" in pressed.message
+    graze = simulate(table_scene(ELLIPSE, [ball("0", "0", "1", "0.3")], cushion_k="0.3", simultaneous="impulses",
+                                 t_end=30))
+    assert graze.status is Status.FAILED and graze.n_collisions < 100
+    with pytest.raises(SceneError, match="kappa = 1"):
+        table_scene('boundary = "circle"\nradius = 10.0',
+                    [{"kappa": 1, "radius": "0.1", "mass": 1, "x": 0, "y": 0, "vx": 1, "vy": 0, "wx": 0, "wy": 0}])
+
+
+def test_a_touching_rack_under_simultaneous_impulses_is_solved_quickly():
+    """15 touching balls: 30 contacts at one instant, beyond the exact active-set search (Gauss-Seidel)."""
+    import time
+
+    r = 0.028575
+    balls = [ball("-0.6", "0.0", "3.0", "0.0", radius=repr(r))]
+    for row in range(5):
+        for m in range(row + 1):
+            balls.append(ball(repr(0.3 + row * math.sqrt(3) * r * (1 + 1e-14)), repr((m - row / 2) * 2 * r), "0",
+                              "0", radius=repr(r)))
+    scene = table_scene('boundary = "rectangle"\nwidth = 2.54\nheight = 1.27', balls, law="newton",
+                        simultaneous="impulses", t_end=0.4)
+    started = time.perf_counter()
+    result = simulate(scene)
+    assert time.perf_counter() - started < 30
+    assert result.status is Status.COMPLETED
+    assert result.energy_final == pytest.approx(result.energy_initial, rel=1e-12)

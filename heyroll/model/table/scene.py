@@ -45,6 +45,8 @@ class TableBall:
         if spin is not None:
             if body.is_particle:
                 raise SceneError(f"{field}.wx", "a particle has no spin (it is the point of the mathematical billiard)")
+            if body.kappa == 1:
+                raise SceneError(f"{field}.wx", "a body with kappa = 1 has no rotational inertia: it has no spin to give")
             wx, wy = (to_mpf(w) for w in spin)
             with workprec():  # u = v - R omega x z, omega x z = (wy, -wx)
                 ux = values["vx"] - body.radius * wy
@@ -112,8 +114,11 @@ class TableScene:
             for k, ball in enumerate(self.balls, start=1):
                 field = f"bodies[{k}]"
                 self.boundary.check_ball(ball.body.radius, f"{field}.radius")
+                within = getattr(self.boundary, "within", None)
                 for w, c in enumerate(self.boundary.wall_constants(ball.body.radius)):
-                    if self.boundary.gap(w, ball.x, ball.y, c) > 0:
+                    # a ball exactly at its curve's point (touching) passes: the 256-bit gap's round-off
+                    if self.boundary.gap(w, ball.x, ball.y, c) > mpmath.mpf(2) ** -200 or \
+                            (within is not None and not within(ball.x, ball.y)):
                         raise SceneError(f"{field}.x", f"the ball is outside the table (its centre ({mpmath.nstr(ball.x, 8)}"
                                                        f", {mpmath.nstr(ball.y, 8)}) is beyond the cushion's reach)")
             for i in range(len(self.balls)):

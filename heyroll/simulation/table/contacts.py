@@ -57,6 +57,11 @@ class ContactGeometry:
         self.newton_tol = num(2.0**-((precision.bits + 1) // 2))
         #: balls whose cushion impacts are polished with the boundary's exact distance (ellipse, R > 0)
         self.exact = {}
+        #: (1/a^2, 1/b^2) of an ellipse: a centre on or past it overlaps whatever its gap polynomial says
+        self.conic = None
+        if scene.boundary.kind == "ellipse":
+            with workprec():
+                self.conic = (num(1 / scene.boundary.a**2), num(1 / scene.boundary.b**2))
         if hasattr(self.boundary, "exact_distance"):
             for k, ball in enumerate(scene.balls):
                 if not self.boundary.conic(ball.body.radius):
@@ -68,12 +73,19 @@ class ContactGeometry:
     def wall(self, k, w, x, y) -> tuple:
         """(distance, outward unit normal) of ball k's centre from wall w (first order: g/|grad g|)."""
         _, c = self.system.walls[(k, w)]
+        if self.conic is not None and x * x * self.conic[0] + y * y * self.conic[1] >= 1:
+            return -self.size, self._outward(x, y)  # past the cushion itself: an overlap of at least R
         g = self.boundary.gap(w, x, y, c)
         gx, gy = self.boundary.gradient(w, x, y, c)
         norm = sqrt(gx * gx + gy * gy)
         if not norm > self.zero:  # the centre of a circular table: as far from the cushion as can be
             return -g, (self.zero, self.zero)
         return -g / norm, (gx / norm, gy / norm)
+
+    def _outward(self, x, y):
+        gx, gy = x * self.conic[0], y * self.conic[1]
+        norm = sqrt(gx * gx + gy * gy)
+        return gx / norm, gy / norm
 
     def exact_wall(self, k, x, y):
         """(distance from the cushion minus R, outward unit normal) of ball k by the exact distance, or None."""
@@ -166,6 +178,9 @@ class ContactGeometry:
             norm = np.hypot(gx, gy)
             with np.errstate(divide="ignore", invalid="ignore"):
                 distance = np.where(norm > 0, -g / norm, np.inf)
+            if self.conic is not None:  # past the ellipse itself: overlapping, whatever the polynomial says
+                distance = np.where(x * x * float(self.conic[0]) + y * y * float(self.conic[1]) >= 1,
+                                    -float(self.size), distance)
             for m in np.flatnonzero(distance <= within):
                 walls.append(Contact("wall", int(balls[m]), w, (gx[m] / norm[m], gy[m] / norm[m]), distance[m]))
         walls.sort(key=lambda c: (c.i, c.j))

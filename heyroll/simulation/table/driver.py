@@ -27,6 +27,8 @@ from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, SLIDING, STATE_PER_B
 STEP_CHUNK = 100_000
 #: Impacts at one instant before the run is declared stuck (an inelastic collapse).
 MAX_AT_ONE_INSTANT = 10_000
+#: Doublings of leave()'s step at most (from an ulp of the table's size).
+LEAVE_DOUBLINGS = 20
 #: Pieces of motion kept for figures.
 MAX_PATH_PIECES = 200_000
 
@@ -81,6 +83,7 @@ class _Run:
         curvature = scene.boundary.least_curvature_radius(max(b.body.radius for b in scene.balls)) \
             if hasattr(scene.boundary, "least_curvature_radius") else None
         self.grazing = None if curvature is None else num(2 * float(self.geometry.touch) / curvature)
+        self.grazing_straight = num(2.0**10 * precision.epsilon) ** 2
         self.t = num(0)
         self.count = self.cushion = self.rerolls = self.events = 0
         self.records: list = []
@@ -89,6 +92,7 @@ class _Run:
         self.paths: list = []
         self.status, self.message = None, ""
         self.fired = None
+        self.resolved: list = []
         self.max_step = num(self.system.max_step)
         self.energy_initial = float(self.energy(self.state))
         self.options = options
@@ -251,14 +255,20 @@ class _Run:
         self.t = self.t + dt
 
     def at_instant(self, fired: Contact | None) -> None:
-        """Resolve the contact heyoka found and every other one touching and approaching at this instant."""
+        """Resolve the contact heyoka found and every other one touching and approaching at this instant,
+        then check the instant: no overlap, no ball grazing a curved cushion or pressed against a cushion;
+        last, open the contacts resolved beside the one that fired past round-off (leave)."""
         self.fired = fired
+        self.resolved = []
         geometry = self.geometry
         if self.scene.simultaneous == "impulses":
             touching = geometry.contacts(self.state, geometry.touch)
             if fired is not None and not any(_same(fired, c) for c in touching):
                 touching.append(fired)
-            if touching and any(geometry.approach(c, self.state) > self.zero for c in touching):
+            approaching = [c for c in touching if geometry.approach(c, self.state) > self.zero]
+            if len(touching) == 1 and approaching:  # one impact alone: the scene's law itself
+                self.resolve(approaching[0] if fired is None or not _same(fired, approaching[0]) else fired)
+            elif approaching:
                 self.simultaneous(touching)
         else:
             if fired is not None:
@@ -275,28 +285,34 @@ class _Run:
                 self.stop(Status.FAILED, f"more than {MAX_AT_ONE_INSTANT} impacts at t = {float(self.t):.17g} s "
                                          "(an inelastic collapse): stopped")
                 return
-        if self.scene.simultaneous == "impulses":
-            near = geometry.contacts(self.state, geometry.touch)
+        if self.status is not None and self.status is not Status.MAX_COLLISIONS:
+            return
+        near = geometry.contacts(self.state, geometry.touch)
         overlapping = [c for c in near if c.distance < -geometry.overlap]
-        if overlapping and self.status is None:
+        if overlapping:
             c = overlapping[0]
             what = f"balls {c.i + 1} and {c.j + 1}" if c.kind == "pair" else f"ball {c.i + 1} and the cushion"
-            self.stop(Status.OVERLAP, f"{what} overlap by {float(-c.distance):.3g} m at t = {float(self.t):.17g} s: "
-                                      "an impact was missed")
+            self.status, self.message = Status.OVERLAP, (
+                f"{what} overlap by {float(-c.distance):.3g} m at t = {float(self.t):.17g} s: an impact was missed")
+            return
+        for c in near:
+            if c.kind == "wall":
+                self.check_cushion_contact(c)
+        for c in self.resolved:
+            if c is not self.fired:  # the event that fired has its cooldown (system.TableSystem.cooldown)
+                self.leave(c)
 
     def resolve(self, contact: Contact) -> None:
         before = list(self.state)
         energy_before = self.energy(before)
         if contact.kind == "wall":
             flag = self.resolver.wall(self.state, contact.i, contact.normal)
-            self.check_grazing(contact)
         else:
             flag = self.resolver.pair(self.state, contact.i, contact.j, contact.normal)
         for k in (contact.i,) if contact.kind == "wall" else (contact.i, contact.j):
             self.set_mode(k)
         self.record(contact, before, self.state, energy_before, self.energy(self.state), flag)
-        if contact is not self.fired:  # the event that fired has its cooldown (system.TableSystem.cooldown)
-            self.leave(contact)
+        self.resolved.append(contact)
 
     def leave(self, contact: Contact) -> None:
         """Put a contact just resolved on its open side by more than its gap function's round-off.
@@ -316,7 +332,7 @@ class _Run:
             _, c = self.system.walls[(contact.i, contact.j)]
             gap = self.scene.boundary.gap
             margin = self.round_off * self.scene.boundary.gap_scale(contact.j, c)
-            for _ in range(80):
+            for _ in range(LEAVE_DOUBLINGS):  # at most ~2^20 ulps in all: never past the overlap guard's reach
                 if gap(contact.j, self.state[s], self.state[s + 1], c) < -margin:
                     return
                 self.state[s] = self.state[s] - step * nx
@@ -327,7 +343,7 @@ class _Run:
         index, reach = self.system.pairs[(contact.i, contact.j)]
         reach2 = self.system.pars[index]
         margin = self.round_off * (reach2 + reach * self.geometry.size)
-        for _ in range(80):
+        for _ in range(LEAVE_DOUBLINGS):
             dx, dy = self.state[o] - self.state[s], self.state[o + 1] - self.state[s + 1]
             if dx * dx + dy * dy - reach2 > margin:
                 return
@@ -335,26 +351,35 @@ class _Run:
             self.state[o], self.state[o + 1] = self.state[o] + step * nx, self.state[o + 1] + step * ny
             step = step * 2
 
-    def check_grazing(self, contact: Contact) -> None:
-        """Stop where a ball leaves a curved cushion too slowly for its next impact to be resolved.
+    def check_cushion_contact(self, contact: Contact) -> None:
+        """Stop where a ball stays on a cushion: a contact mode that is not modelled.
 
-        After an impact at normal speed v_n along a cushion of radius of curvature rho, the ball's
-        chord dips into the table by about v_n^2 rho / (2 v^2) before the next impact: below the
-        contact resolution the impacts can no longer be told apart. With k < 1 they accumulate
-        (v_n shrinks by k each time, in a finite time): the ball settles onto the cushion and would
-        roll along it pressed against it, a contact mode that is not modelled.
+        * Grazing a curved cushion: after an impact at normal speed v_n along a cushion of radius of
+          curvature rho the ball's chord dips into the table by about v_n^2 rho / (2 v^2) before the
+          next impact; below the contact resolution the impacts can no longer be told apart. With
+          k < 1 they accumulate (v_n shrinks by k each time, in a finite time): the ball settles onto
+          the cushion and would roll along it pressed against it. A ball started touching a curved
+          cushion and moving along it is the same case.
+        * Pressed against a straight cushion: no normal speed left (k = 0) while sliding friction drives
+          the ball into the cushion.
         """
-        if self.grazing is None:
-            return
-        s = STATE_PER_BALL * contact.i
+        k = contact.i
+        s, b = STATE_PER_BALL * k, BALL_PARS * k
         vx, vy = self.state[s + 2], self.state[s + 3]
-        vn = -(vx * contact.normal[0] + vy * contact.normal[1])
+        nx, ny = contact.normal
+        vn = -(vx * nx + vy * ny)  # into the table
         speed2 = vx * vx + vy * vy
-        if speed2 > self.zero and vn * vn < self.grazing * speed2:
-            self.stop(Status.FAILED, f"ball {contact.i + 1} leaves the curved cushion at t = {float(self.t):.17g} s with "
-                                     f"a normal speed {float(vn / sqrt(speed2)):.3g} of its speed, too slow to resolve "
-                                     "its next impact (impacts accumulate: the ball settles onto the cushion, and "
-                                     "rolling along a cushion is not modelled)")
+        if self.grazing is not None and speed2 > self.zero and vn * vn < self.grazing * speed2:
+            self.stop(Status.FAILED, f"ball {k + 1} moves along the curved cushion at t = {float(self.t):.17g} s with a "
+                                     f"normal speed {float(vn / sqrt(speed2)):.3g} of its speed, too slow to resolve its "
+                                     "next impact (impacts accumulate: the ball settles onto the cushion, and rolling "
+                                     "along a cushion is not modelled)")
+            return
+        push = self.pars[b + FVX] * nx + self.pars[b + FVY] * ny
+        if push > self.zero and not vn * vn > self.grazing_straight * speed2:
+            self.stop(Status.FAILED, f"ball {k + 1} is pressed against the cushion at t = {float(self.t):.17g} s (no "
+                                     "normal speed left, sliding friction driving it into the cushion): sliding along "
+                                     "a cushion is not modelled")
 
     def simultaneous(self, contacts: list) -> None:
         before = list(self.state)
@@ -372,7 +397,7 @@ class _Run:
         for c, lam in zip(contacts, impulses):
             if lam > self.zero:
                 self.record(c, before, self.state, energy_before, energy_after, SIMULTANEOUS)
-                self.leave(c)
+                self.resolved.append(c)
 
     def record(self, contact: Contact, before, after, energy_before, energy_after, flag) -> None:
         i = contact.i

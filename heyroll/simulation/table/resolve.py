@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from itertools import combinations
 
-from ...model._numbers import workprec
 from ...model.table import TableScene
 from ...model.table.laws import after_impact
 from ...model.table.laws.ball_ball.newton import NewtonTableLaw
@@ -29,10 +28,14 @@ from .contacts import Contact
 from .system import STATE_PER_BALL
 
 #: law_flag: 0 the scene's law, 1 Newton's law where the scene's would leave the balls approaching
-#: (Hedrih's law on unequal radii), 2 a simultaneous-impulse resolution.
-SCENE_LAW, FALLBACK_LAW, SIMULTANEOUS = 0, 1, 2
-#: Contacts resolved together by 'impulses' at most (the active set is searched over their subsets).
-MAX_SIMULTANEOUS = 12
+#: (Hedrih's law on unequal radii), 2 a simultaneous-impulse resolution, 3 a rolling law met a sliding ball:
+#: the impulse went through the centres (Newton's law with the masses), the spins were kept.
+SCENE_LAW, FALLBACK_LAW, SIMULTANEOUS, SLIDING_BALL = 0, 1, 2, 3
+#: Contacts whose active set 'impulses' searches over all subsets (2^m of them); more go to projected
+#: Gauss-Seidel (a rack of 15 balls touching: 30 contacts).
+MAX_SIMULTANEOUS = 8
+#: Sweeps of projected Gauss-Seidel at most.
+GAUSS_SEIDEL_SWEEPS = 100_000
 
 
 class Resolver:
@@ -40,7 +43,8 @@ class Resolver:
         num = precision.number
         self.scene = scene
         self.zero = num(0)
-        self.particle = [b.body.is_particle for b in scene.balls]
+        #: balls without rotational inertia (particles, kappa = 1): no spin, no slip
+        self.particle = [b.body.is_particle or b.body.kappa == 1 for b in scene.balls]
         n = scene.n_bodies
         self.pair_constants, self.fallback = {}, {}
         self.newton = newton = NewtonTableLaw(restitution=scene.law.restitution)
@@ -55,23 +59,32 @@ class Resolver:
         self.k_cushion = num(scene.cushion.restitution)
         self.k_law = num(scene.law.restitution)
         one_d = getattr(scene.law, "one_dimensional", None)
-        self.mobility = []  # 1/mu_b: velocity change per unit law impulse along a normal
+        #: the law's velocity scale c (u = c v_n: omega_n = v_n/R for Hedrih's law, v_n for Newton's) and
+        #: inertia M of each ball (J_P or m): a law impulse L changes u by L/M, so v by L/(M c)
+        self.scale, self.inertia = [], []
         for ball in scene.balls:
             if one_d is None or ball.body.is_particle:
-                self.mobility.append(1 / num(ball.body.mass))
+                self.scale.append(num(1))
+                self.inertia.append(num(ball.body.mass))
             else:
                 v = one_d().variables(ball.body, 1)
-                with workprec():
-                    mu = v.inertia * v.scale
-                self.mobility.append(1 / num(mu))
+                self.scale.append(num(v.scale))
+                self.inertia.append(num(v.inertia))
 
     # -- one contact -------------------------------------------------------------------------
     def wall(self, state: list, k: int, normal) -> int:
         """Ball k hits a cushion with outward normal ``normal``: state updated in place."""
         x, y, vx, vy, ux, uy = state[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
         vn = vx * normal[0] + vy * normal[1]
-        v, u = after_impact((vx, vy), (ux, uy), normal, -self.k_cushion * vn, self.scene.cushion.keeps_rolling,
-                            self.particle[k])
+        rolling_kept = self.scene.cushion.keeps_rolling
+        v, u = after_impact((vx, vy), (ux, uy), normal, -self.k_cushion * vn, rolling_kept, self.particle[k])
+        if rolling_kept and not self.particle[k] and (ux != self.zero or uy != self.zero):
+            # a sliding ball: its rolling rate R omega x z = v - u is reflected as v is (the paper's model
+            # reverses the normal rolling rate), so that k = 1 keeps both energies
+            w = (vx - ux, vy - uy)
+            wn = w[0] * normal[0] + w[1] * normal[1]
+            w = (w[0] - (1 + self.k_cushion) * wn * normal[0], w[1] - (1 + self.k_cushion) * wn * normal[1])
+            u = (v[0] - w[0], v[1] - w[1])
         state[STATE_PER_BALL * k + 2:STATE_PER_BALL * (k + 1)] = [v[0], v[1], u[0], u[1]]
         return SCENE_LAW
 
@@ -84,7 +97,14 @@ class Resolver:
         vn_j = vj[0] * normal[0] + vj[1] * normal[1]
         flag, keeps = SCENE_LAW, law.keeps_rolling
         c = self.pair_constants[(i, j)]
-        if c is None:
+        sliding = any(not self.particle[b] and (state[STATE_PER_BALL * b + 4] != self.zero
+                                                 or state[STATE_PER_BALL * b + 5] != self.zero) for b in (i, j))
+        if keeps and sliding:
+            # a law of rolling bodies cannot act on a ball that slides: the impulse goes through the centres
+            # (Newton's law with the masses), the spins are kept (law_flag 3, as on a rough track)
+            new_i, new_j = self.newton.normal_rates(self.fallback[(i, j)], vn_i, vn_j)
+            flag, keeps = SLIDING_BALL, False
+        elif c is None:
             flag, c = FALLBACK_LAW, self.fallback[(i, j)]
             new_i, new_j = self.newton.normal_rates(c, vn_i, vn_j)
         else:
@@ -102,7 +122,13 @@ class Resolver:
 
     # -- simultaneous impulses ---------------------------------------------------------------
     def impulses(self, state: list, contacts: list[Contact], approach) -> list:
-        """Resolve ``contacts`` at once (module docstring); returns the impulses L (run type)."""
+        """Resolve ``contacts`` at once (module docstring); returns the impulses L (run type).
+
+        In the law's variables u = c v_n with inertias M (so that one contact alone is exactly the
+        scene's law): a contact's separation rate is sigma = sum_b c_b J_cb . v_b, an impulse L along
+        J_cb changes v_b by L J_cb / (M_b c_b), so sigma by L sum_b J_cb . J_db / M_b (a symmetric
+        positive semi-definite matrix). A cushion acts on its ball's u with the cushion's restitution.
+        """
         m = len(contacts)
         # J_cb: the direction in which contact c's impulse pushes ball b
         pushes = []
@@ -119,11 +145,14 @@ class Resolver:
                 for b, (jx, jy) in pushes[p].items():
                     if b in pushes[q]:
                         kx, ky = pushes[q][b]
-                        total = total + (jx * kx + jy * ky) * self.mobility[b]
+                        total = total + (jx * kx + jy * ky) / self.inertia[b]
                 a[p][q] = total
         rhs = []
-        for c in contacts:
-            sigma = -approach(c, state)
+        for c, push in zip(contacts, pushes):
+            sigma = self.zero
+            for b, (jx, jy) in push.items():
+                base = STATE_PER_BALL * b
+                sigma = sigma + self.scale[b] * (jx * state[base + 2] + jy * state[base + 3])
             k = self.k_cushion if c.kind == "wall" else self.k_law
             rhs.append(sigma + k * sigma if sigma < self.zero else sigma)
         impulses = _complementarity(a, rhs, self.zero)
@@ -135,7 +164,8 @@ class Resolver:
             keeps = self.scene.cushion.keeps_rolling if c.kind == "wall" else self.scene.law.keeps_rolling
             for b, (jx, jy) in push.items():
                 base = STATE_PER_BALL * b
-                dvx, dvy = lam * jx * self.mobility[b], lam * jy * self.mobility[b]
+                mobility = lam / (self.inertia[b] * self.scale[b])
+                dvx, dvy = jx * mobility, jy * mobility
                 state[base + 2] = state[base + 2] + dvx
                 state[base + 3] = state[base + 3] + dvy
                 if self.particle[b]:
@@ -147,10 +177,13 @@ class Resolver:
 
 
 def _complementarity(a, b, zero):
-    """L >= 0 with w = A L + b >= 0 and L . w = 0, by trying active sets, smallest first (A symmetric PSD)."""
+    """L >= 0 with w = A L + b >= 0 and L . w = 0 (A symmetric PSD): exactly, by trying active sets
+    smallest first, for up to MAX_SIMULTANEOUS contacts; beyond, by projected Gauss-Seidel sweeps."""
     m = len(b)
     if all(x >= zero for x in b):
         return [zero] * m
+    if m > MAX_SIMULTANEOUS:
+        return _gauss_seidel(a, b, zero)
     slack = max(abs(x) for x in b) * 1e-12 if m else zero
     for size in range(1, m + 1):
         for subset in combinations(range(m), size):
@@ -187,3 +220,29 @@ def _solve(matrix, rhs):
             total = total - m[r][c] * x[c]
         x[r] = total / m[r][r]
     return x
+
+
+def _gauss_seidel(a, b, zero):
+    """Projected Gauss-Seidel for the complementarity problem: converges for a symmetric PSD A with
+    positive diagonal; stops when a sweep changes no impulse by more than 1e-14 of the largest."""
+    m = len(b)
+    lam = [zero] * m
+    for _ in range(GAUSS_SEIDEL_SWEEPS):
+        change = zero
+        for p in range(m):
+            if not a[p][p] > zero:
+                continue
+            w = b[p]
+            for q in range(m):
+                w = w + a[p][q] * lam[q]
+            new = lam[p] - w / a[p][p]
+            if new < zero:
+                new = zero
+            step = abs(new - lam[p])
+            if step > change:
+                change = step
+            lam[p] = new
+        largest = max(lam)
+        if not change > largest * 1e-14:
+            return lam
+    return None

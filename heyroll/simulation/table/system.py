@@ -82,7 +82,8 @@ class TableSystem:
 
 
 def can_slide(scene: TableScene, k: int) -> bool:
-    return scene.slides and scene.friction > 0 and not scene.balls[k].body.is_particle
+    body = scene.balls[k].body
+    return scene.slides and scene.friction > 0 and not body.is_particle and body.kappa > 1
 
 
 def table_system(scene: TableScene, precision: Precision) -> TableSystem:

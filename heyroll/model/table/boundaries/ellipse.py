@@ -136,6 +136,11 @@ class EllipseBoundary:
             return c[0] * x * x + c[1] * y * y - 1
         return offset_polynomial(c[0] * x * x, c[0] * y * y, c[1:])
 
+    def within(self, x, y):
+        """The centre (x, y) is strictly inside the ellipse itself (the gap polynomial of a finite ball turns
+        back to negative beyond the outer parallel curve: its sign alone cannot tell a ball far outside)."""
+        return x * x / self.a**2 + y * y / self.b**2 < 1
+
     def gap_scale(self, wall, c):
         """Magnitude of the gap function's terms at the wall (its round-off is a few ulps of this)."""
         if len(c) == 2:
