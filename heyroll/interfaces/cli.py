@@ -338,6 +338,14 @@ def _body_number(text: str, scene: Scene) -> int:
     return n - 1
 
 
+def _table_scene(path: str, command: str):
+    """The scene of ``heyroll billiard COMMAND``: a billiard table, or one line and exit 2."""
+    scene = load_scene(path)
+    if getattr(scene, "kind", None) != "table":
+        raise BadInput("scene", f'billiard {command} needs a table scene ([track] type = "table")')
+    return scene
+
+
 def _billiard_portrait(args) -> int:
     from ..analysis.billiard_portrait import birkhoff_portrait
     from .outputs import atomic_write_text
@@ -346,9 +354,7 @@ def _billiard_portrait(args) -> int:
     runs = _collision_count(args.runs, "--runs")
     impacts = _collision_count(args.impacts, "--impacts")
     ball = _collision_count(args.ball, "--ball")
-    scene = load_scene(args.scene)
-    if getattr(scene, "kind", None) != "table":
-        raise BadInput("scene", 'billiard portrait needs a table scene ([track] type = "table")')
+    scene = _table_scene(args.scene, "portrait")
     out = _out_dir(args.out)
     _writable(out)
     launches = birkhoff_portrait(scene, runs, impacts, ball)
@@ -374,9 +380,7 @@ def _billiard_orbits(args) -> int:
     period = _collision_count(args.period, "--period")
     rotation = _collision_count(args.rotation, "--rotation")
     ball = _collision_count(args.ball, "--ball")
-    scene = load_scene(args.scene)
-    if getattr(scene, "kind", None) != "table":
-        raise BadInput("scene", 'billiard orbits needs a table scene ([track] type = "table")')
+    scene = _table_scene(args.scene, "orbits")
     orbits = periodic_orbits(scene, period, rotation, ball)
     if args.json:
         print(json.dumps([o.as_dict() for o in orbits], indent=2))
