@@ -582,3 +582,8 @@ def test_a_touching_rack_under_simultaneous_impulses_is_solved_quickly():
     assert time.perf_counter() - started < 30
     assert result.status is Status.COMPLETED
     assert result.energy_final == pytest.approx(result.energy_initial, rel=1e-12)
+
+
+def test_a_particle_in_the_ellipse_runs_long():
+    table = simulate(table_scene(ELLIPSE, [particle(0.3, -0.2, 1.0, 0.7)], law="newton", t_end=500)).collision_table()
+    assert len(table) > 400

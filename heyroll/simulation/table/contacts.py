@@ -73,7 +73,7 @@ class ContactGeometry:
     def wall(self, k, w, x, y) -> tuple:
         """(distance, outward unit normal) of ball k's centre from wall w (first order: g/|grad g|)."""
         _, c = self.system.walls[(k, w)]
-        if self.conic is not None and x * x * self.conic[0] + y * y * self.conic[1] >= 1:
+        if self.conic is not None and len(c) > 2 and x * x * self.conic[0] + y * y * self.conic[1] >= 1:
             return -self.size, self._outward(x, y)  # past the cushion itself: an overlap of at least R
         g = self.boundary.gap(w, x, y, c)
         gx, gy = self.boundary.gradient(w, x, y, c)
@@ -178,7 +178,7 @@ class ContactGeometry:
             norm = np.hypot(gx, gy)
             with np.errstate(divide="ignore", invalid="ignore"):
                 distance = np.where(norm > 0, -g / norm, np.inf)
-            if self.conic is not None:  # past the ellipse itself: overlapping, whatever the polynomial says
+            if self.conic is not None and len(constants) > 2:  # a finite ball past the ellipse itself: overlapping
                 distance = np.where(x * x * float(self.conic[0]) + y * y * float(self.conic[1]) >= 1,
                                     -float(self.size), distance)
             for m in np.flatnonzero(distance <= within):
