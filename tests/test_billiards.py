@@ -585,5 +585,6 @@ def test_a_touching_rack_under_simultaneous_impulses_is_solved_quickly():
 
 
 def test_a_particle_in_the_ellipse_runs_long():
-    table = simulate(table_scene(ELLIPSE, [particle(0.3, -0.2, 1.0, 0.7)], law="newton", t_end=500)).collision_table()
-    assert len(table) > 400
+    """A particle touching the ellipse at each impact is on it, not past it (the overlap check of balls)."""
+    result = simulate(table_scene(ELLIPSE, [particle(0.3, -0.2, 1.0, 0.7)], law="newton", t_end=500))
+    assert result.status is Status.COMPLETED and result.n_collisions > 250
