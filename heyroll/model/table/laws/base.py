@@ -15,7 +15,10 @@ Laws are evaluated in the run's own number type with constants rounded once
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import ClassVar, Protocol, runtime_checkable
+
+import mpmath
 
 
 @runtime_checkable
@@ -92,3 +95,17 @@ class NormalImpulseLaw:
         # D = vn_i - q vn_j; vn_i+ = vn_i - a_i D, vn_j+ = vn_j + a_j D (see heyroll.model.laws.base.ImpulseMap)
         d = vn_i - c[0] * vn_j
         return vn_i - c[1] * d, vn_j + c[2] * d
+
+
+@dataclass(frozen=True)
+class RestitutionLaw:
+    """A table law's one number, its restitution k in [0, 1], checked on construction."""
+
+    restitution: mpmath.mpf = field(default_factory=lambda: mpmath.mpf(1))
+    #: the scene-file field a bad k is reported under
+    restitution_field: ClassVar[str] = "collision.restitution"
+
+    def __post_init__(self):
+        from ....model.laws.base import check_restitution
+
+        object.__setattr__(self, "restitution", check_restitution(self.restitution, self.restitution_field))

@@ -10,25 +10,18 @@ eq. (15) on the normal rates.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
-import mpmath
-
 from ....laws import HedrihRollingLaw
-from ..base import NormalImpulseLaw
-from ....laws.base import check_restitution
+from ..base import NormalImpulseLaw, RestitutionLaw
 
 
 @dataclass(frozen=True)
-class HedrihTableLaw(NormalImpulseLaw):
+class HedrihTableLaw(NormalImpulseLaw, RestitutionLaw):
     name: ClassVar[str] = "hedrih"
     source: ClassVar[str] = "Hedrih's rolling-collision law (eqs. 8-15) on the normal rolling rates v.n/R"
     keeps_rolling: ClassVar[bool] = True
-    restitution: mpmath.mpf = field(default_factory=lambda: mpmath.mpf(1))
-
-    def __post_init__(self):
-        object.__setattr__(self, "restitution", check_restitution(self.restitution))
 
     def one_dimensional(self):
         return HedrihRollingLaw(restitution=self.restitution)

@@ -11,23 +11,17 @@ equal (papers/ERRATA.md, section 7).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
-import mpmath
-
-from ....laws.base import check_restitution
+from ..base import RestitutionLaw
 
 
 @dataclass(frozen=True)
-class MirrorTableLaw:
+class MirrorTableLaw(RestitutionLaw):
     name: ClassVar[str] = "mirror"
     source: ClassVar[str] = "paper eqs. (109)-(113) literally: each ball's path mirrored in the tangent plane"
     keeps_rolling: ClassVar[bool] = True
-    restitution: mpmath.mpf = field(default_factory=lambda: mpmath.mpf(1))
-
-    def __post_init__(self):
-        object.__setattr__(self, "restitution", check_restitution(self.restitution))
 
     def constants(self, body_i, body_j, number) -> tuple:
         return (number(self.restitution),)

@@ -8,25 +8,18 @@ with rolling imposed, for comparison with Hedrih's, as in the paper's Table 1.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
-import mpmath
-
 from ....laws import NewtonCentreLaw
-from ..base import NormalImpulseLaw
-from ....laws.base import check_restitution
+from ..base import NormalImpulseLaw, RestitutionLaw
 
 
 @dataclass(frozen=True)
-class NewtonTableLaw(NormalImpulseLaw):
+class NewtonTableLaw(NormalImpulseLaw, RestitutionLaw):
     name: ClassVar[str] = "newton"
     source: ClassVar[str] = "Newton's law of central collision (eqs. 1-5) on the centre velocities' normal parts"
     keeps_rolling: ClassVar[bool] = True
-    restitution: mpmath.mpf = field(default_factory=lambda: mpmath.mpf(1))
-
-    def __post_init__(self):
-        object.__setattr__(self, "restitution", check_restitution(self.restitution))
 
     def one_dimensional(self):
         return NewtonCentreLaw(restitution=self.restitution)

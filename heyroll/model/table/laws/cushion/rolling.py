@@ -7,20 +7,15 @@ part is kept; the ball rolls on. Energy lost: 1/2 kappa m (1 - k^2) v_n^2.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
-import mpmath
-
-from ....laws.base import check_restitution
+from ..base import RestitutionLaw
 
 
 @dataclass(frozen=True)
-class RollingCushion:
+class RollingCushion(RestitutionLaw):
     name: ClassVar[str] = "rolling"
     source: ClassVar[str] = "paper section 7.2 (Fig. 22): normal rolling rate reversed and scaled by k, rolling kept"
     keeps_rolling: ClassVar[bool] = True
-    restitution: mpmath.mpf = field(default_factory=lambda: mpmath.mpf(1))
-
-    def __post_init__(self):
-        object.__setattr__(self, "restitution", check_restitution(self.restitution, "track.cushion_restitution"))
+    restitution_field: ClassVar[str] = "track.cushion_restitution"

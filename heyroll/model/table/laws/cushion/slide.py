@@ -10,20 +10,15 @@ slides. No friction acts in the cushion contact itself.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
-import mpmath
-
-from ....laws.base import check_restitution
+from ..base import RestitutionLaw
 
 
 @dataclass(frozen=True)
-class SlideCushion:
+class SlideCushion(RestitutionLaw):
     name: ClassVar[str] = "slide"
     source: ClassVar[str] = "impulse through the centre, spin kept, then sliding on the cloth (Coulomb friction)"
     keeps_rolling: ClassVar[bool] = False
-    restitution: mpmath.mpf = field(default_factory=lambda: mpmath.mpf(1))
-
-    def __post_init__(self):
-        object.__setattr__(self, "restitution", check_restitution(self.restitution, "track.cushion_restitution"))
+    restitution_field: ClassVar[str] = "track.cushion_restitution"
