@@ -17,6 +17,7 @@ from pathlib import Path
 
 from ..errors import SceneError
 from ..model.scene import Scene
+from ..model.table import is_table
 from ..simulation.driver import simulate
 from ..simulation.precision import Precision
 from .scene_file import default_scene, default_scene_text, load_scene
@@ -199,7 +200,7 @@ def _run(args) -> int:
     print(f"{result.status.value}: {result.message}")
     for warning in result.settings.get("warnings", []):
         print(f"warning: {warning}")
-    if getattr(result, "kind", None) == "table":
+    if is_table(result):
         print(f"{result.n_collisions} impacts ({result.n_cushion} on the cushion), t_final = "
               f"{float(result.t_final):.17g} s, energy {result.energy_initial:.17g} -> {result.energy_final:.17g} J, "
               f"{result.wall_time_s:.3g} s wall ({rate:.3g} impacts/s incl. set-up)")
@@ -323,7 +324,7 @@ def _path_scene(path: str, command: str) -> Scene:
 
 def _not_a_table(scene, command: str):
     """A scene for a command of the vertical-plane tracks: a billiard table is refused in one line."""
-    if getattr(scene, "kind", None) == "table":
+    if is_table(scene):
         hint = ("its impacts are checked against the mpmath reference in tests/test_billiards.py and "
                 "validation/billiards.py" if command == "validate" else "try: heyroll billiard orbits")
         raise BadInput("scene", f"heyroll {command} works on tracks in a vertical plane, not on a billiard table "
@@ -341,7 +342,7 @@ def _body_number(text: str, scene: Scene) -> int:
 def _table_scene(path: str, command: str):
     """The scene of ``heyroll billiard COMMAND``: a billiard table, or one line and exit 2."""
     scene = load_scene(path)
-    if getattr(scene, "kind", None) != "table":
+    if not is_table(scene):
         raise BadInput("scene", f'billiard {command} needs a table scene ([track] type = "table")')
     return scene
 

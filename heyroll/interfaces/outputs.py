@@ -17,6 +17,7 @@ import numpy as np
 
 from .._version import __version__
 from .csv_text import collisions_csv, csv_rows
+from ..model.table import is_table
 from ..simulation.table.result import impact_table
 from ..simulation.result import (INTEGER_COLUMNS, PASSAGE_COLUMNS, SimulationResult,
                                  build_collision_table, table_columns)
@@ -60,7 +61,7 @@ class _TableFile:
         self.scene, self.pairs, self.precision = scene, pairs, precision
         self._file = open(self._tmp, "wb")
         self._start()
-        if not _is_table(scene) and scene.domain(0) is not None:  # an open track: passages.csv streamed beside the table
+        if not is_table(scene) and scene.domain(0) is not None:  # an open track: passages.csv streamed beside the table
             self.passages_path = str(self._final.with_name("passages.csv"))
             self._passages_tmp = self._final.with_name(".passages.csv.tmp")
             self._passages = open(self._passages_tmp, "wb")
@@ -72,7 +73,7 @@ class _TableFile:
         self.passage_rows += table.size
 
     def write(self, chunk, first_number: int) -> None:
-        if _is_table(self.scene):  # billiards: the chunk is a list of impact records
+        if is_table(self.scene):  # billiards: the chunk is a list of impact records
             table = impact_table(self.scene, chunk, self.precision, first_number, native=True)
             self._append(table)
             self.rows += table.size
@@ -108,7 +109,7 @@ class CsvTableSink(_TableFile):
         self._file.write((",".join(table_columns(self.scene)) + "\n").encode())
 
     def _append(self, table):
-        if _is_table(self.scene):  # a cell that does not apply (a cushion impact's ball j) is empty
+        if is_table(self.scene):  # a cell that does not apply (a cushion impact's ball j) is empty
             self._file.write(csv_rows(table, _or_empty(self.precision.format)).replace(b",nan", b","))
             return
         self._file.write(csv_rows(table, self.precision.format))
@@ -184,12 +185,8 @@ class ParquetTableSink(_TableFile):
         self._writer.close()
 
 
-def _is_table(scene) -> bool:
-    return getattr(scene, "kind", None) == "table"
-
-
 def _empty_table(scene, precision) -> np.ndarray:
-    if _is_table(scene):
+    if is_table(scene):
         return impact_table(scene, [], precision)
     return build_collision_table(scene, (), precision, [], [], [], [], [])
 
@@ -256,7 +253,7 @@ def table_sink(out_dir: Path, table_format: str = "csv") -> _TableFile:
 def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, figures: bool = True, sink=None) -> dict:
     """Write the table (unless ``sink`` streamed it), summary.json and the figures into ``out_dir``."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    if _is_table(result.scene):
+    if is_table(result.scene):
         return _write_table_run(result, out_dir, scene_source=scene_source, figures=figures, sink=sink)
     if sink is None:
         sink = table_sink(out_dir, "csv")

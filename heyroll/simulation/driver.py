@@ -26,6 +26,7 @@ import mpmath
 import numpy as np
 
 from ..model.scene import Scene
+from ..model.table import is_table
 from .events import CollisionLog, StopRequest, fill_record_modes, mode_events, mode_handlers
 from .resolve.friction import FrictionState, initial_modes
 from .compiled_cache import CompiledCache
@@ -188,7 +189,7 @@ def simulate(
 
 
 def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResult:
-    if getattr(scene, "kind", None) == "table":  # billiards: balls on a table (paper section 7)
+    if is_table(scene):  # billiards: balls on a table (paper section 7)
         from .table.driver import simulate_table
 
         return simulate_table(scene, opts, sink, progress)

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..model.laws import collision_impulse, kinetic_energy_change
 from ..model.scene import ContactPair, Scene
+from ..model.table import is_table
 from ..model.tracks import first_integral, mechanical_energy
 from .precision import Precision
 
@@ -73,7 +74,7 @@ MODE_COLUMNS = ("mode_i_before", "mode_j_before", "mode_i_after", "mode_j_after"
 
 def table_columns(scene: Scene) -> tuple:
     """The collision table's columns for ``scene``: TABLE_COLUMNS, then MODE_COLUMNS on a rough track."""
-    if getattr(scene, "kind", None) == "table":  # billiards (paper section 7)
+    if is_table(scene):  # billiards (paper section 7)
         from .table.result import IMPACT_COLUMNS
 
         return IMPACT_COLUMNS

@@ -2,8 +2,8 @@
 
 from .boundaries import BOUNDARY_KEYS, CircleBoundary, EllipseBoundary, PolygonBoundary, RectangleBoundary
 from .laws import BALL_LAWS, CUSHION_LAWS, make_ball_law, make_cushion_law
-from .scene import SIMULTANEOUS_POLICIES, TableBall, TableScene
+from .scene import SIMULTANEOUS_POLICIES, TableBall, TableScene, is_table
 
 __all__ = ["BALL_LAWS", "BOUNDARY_KEYS", "CUSHION_LAWS", "CircleBoundary", "EllipseBoundary", "PolygonBoundary",
-           "RectangleBoundary", "SIMULTANEOUS_POLICIES", "TableBall", "TableScene", "make_ball_law",
+           "RectangleBoundary", "SIMULTANEOUS_POLICIES", "TableBall", "TableScene", "is_table", "make_ball_law",
            "make_cushion_law"]

@@ -154,3 +154,8 @@ class TableScene:
         return (f"{self.name}: {self.boundary.describe()}, {len(self.balls)} ball(s) [{balls}], law {self.law.name} "
                 f"k={mpmath.nstr(self.law.restitution, 6)}, cushion {self.cushion.name} "
                 f"k={mpmath.nstr(self.cushion.restitution, 6)}, friction {mpmath.nstr(self.friction, 6)}")
+
+
+def is_table(scene) -> bool:
+    """True for a billiard scene (a TableScene, or a result of one): the one test every layer uses."""
+    return getattr(scene, "kind", None) == "table"
