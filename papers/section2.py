@@ -34,7 +34,6 @@ Prints a PASS/FAIL line per check; exits 1 if one fails.
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 from pathlib import Path
@@ -416,12 +415,9 @@ def main(out_dir=None, quick=False) -> dict:
 
 
 def cli(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "figures")
-    parser.add_argument("--quick", action="store_true", help="fewer samples, no three-particle run")
-    args = parser.parse_args(argv)
-    checks = main(args.out, quick=args.quick)
-    return 0 if all(ok for ok, _ in checks.values()) else 1
+    from _study import study_cli  # papers/_study.py: run as a script, papers/ is on the path
+
+    return study_cli(main, __doc__, "fewer samples, no three-particle run", argv)
 
 
 if __name__ == "__main__":

@@ -52,7 +52,6 @@ path is not a conic billiard) and draws coarser pictures.
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import sys
@@ -426,6 +425,19 @@ def fig24(runs, bodies, path: Path) -> Path:
     return _save(fig, path)
 
 
+def _velocity_plan(ax, v, margin, xlabel, ylabel) -> None:
+    """Axes of a velocity plan: through the origin, square, wide enough for every vector of ``v``."""
+    ax.axhline(0, color="0.6", lw=0.6)
+    ax.axvline(0, color="0.6", lw=0.6)
+    lim = margin * max(np.hypot(*w) for w in v.values())
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.set_aspect("equal")
+    ax.legend(fontsize=7, loc="lower right")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+
+
 def fig25(runs, bodies, path: Path) -> Path:
     fig = Figure(figsize=(11, 10))
     colours = ("tab:orange", "tab:purple")
@@ -438,15 +450,7 @@ def fig25(runs, bodies, path: Path) -> Path:
                 _arrow(ax, (0, 0), vec, colours[k], None, lw=1.4, ls=ls)
                 ax.plot([], [], ls, color=colours[k], label=f"v_T{k + 1},hor,{'impact' if when == 'before' else 'out'} "
                                                             f"= ({vec[0]:.3f}, {vec[1]:.3f})")
-        ax.axhline(0, color="0.6", lw=0.6)
-        ax.axvline(0, color="0.6", lw=0.6)
-        lim = 1.2 * max(np.hypot(*w) for w in v.values())
-        ax.set_xlim(-lim, lim)
-        ax.set_ylim(-lim, lim)
-        ax.set_aspect("equal")
-        ax.legend(fontsize=7, loc="lower right")
-        ax.set_xlabel("x (tangent plane), m/s")
-        ax.set_ylabel("y (line of centres), m/s")
+        _velocity_plan(ax, v, 1.2, "x (tangent plane), m/s", "y (line of centres), m/s")
         ax.set_title(f"{law}: horizontal velocities of T1, T2 (= v_C1, v_C2)", fontsize=9)
         # the velocities of T1, T2 in the common tangent plane: (tangential x, vertical z)
         ax = fig.add_subplot(2, 2, p + 3)
@@ -458,15 +462,7 @@ def fig25(runs, bodies, path: Path) -> Path:
                 _arrow(ax, (0, 0), (vec[0], vertical), colours[k], None, lw=1.4, ls=ls)
                 ax.plot([], [], ls, color=colours[k], label=f"T{k + 1} {'impact' if when == 'before' else 'out'}: "
                                                             f"v_x = {vec[0]:.3f}, v_z = {vertical:.3f}")
-        ax.axhline(0, color="0.6", lw=0.6)
-        ax.axvline(0, color="0.6", lw=0.6)
-        lim = 1.3 * max(np.hypot(*w) for w in v.values())
-        ax.set_xlim(-lim, lim)
-        ax.set_ylim(-lim, lim)
-        ax.set_aspect("equal")
-        ax.legend(fontsize=7, loc="lower right")
-        ax.set_xlabel("x (tangential), m/s")
-        ax.set_ylabel("z (vertical), m/s")
+        _velocity_plan(ax, v, 1.3, "x (tangential), m/s", "z (vertical), m/s")
         ax.set_title(f"{law}: T1, T2 in the common tangent plane\n"
                      "(v_z = R omega_P cos(alpha), eqs. 108 corrected, 112)",
                      fontsize=9)
@@ -943,12 +939,9 @@ def main(out_dir=None, quick=False) -> dict:
 
 
 def cli(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "figures")
-    parser.add_argument("--quick", action="store_true", help="no long elliptical run, coarser curves")
-    args = parser.parse_args(argv)
-    checks = main(args.out, quick=args.quick)
-    return 0 if all(ok for ok, _ in checks.values()) else 1
+    from _study import study_cli  # papers/_study.py: run as a script, papers/ is on the path
+
+    return study_cli(main, __doc__, "no long elliptical run, coarser curves", argv)
 
 
 if __name__ == "__main__":
