@@ -289,6 +289,7 @@ class _Run:
         self.fired = fired
         self.resolved = []
         geometry = self.geometry
+        near = None  # the touching contacts of the state as it now is
         if self.scene.simultaneous == "impulses":
             touching = geometry.contacts(self.state, geometry.touch)
             if fired is not None and not any(_same(fired, c) for c in touching):
@@ -315,7 +316,8 @@ class _Run:
                 return
         if self.status is not None and self.status is not Status.MAX_COLLISIONS:
             return
-        near = geometry.contacts(self.state, geometry.touch)
+        if near is None or self.scene.simultaneous == "impulses":
+            near = geometry.contacts(self.state, geometry.touch)
         overlapping = [c for c in near if c.distance < -geometry.overlap]
         if overlapping:
             c = overlapping[0]
