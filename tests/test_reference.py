@@ -73,7 +73,7 @@ def _integrator(scene, high_accuracy=True, nt_events=()):
     assert sys_.parameters[0] == A_EXACT
     return hy.taylor_adaptive(
         sys_.equations,
-        sys_.initial_state,
+        sys_.initial_state_of(scene),
         pars=sys_.parameters,
         high_accuracy=high_accuracy,
         nt_events=list(nt_events),

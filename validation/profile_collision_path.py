@@ -46,7 +46,7 @@ def best_of(fn, repeat):
 def bare_integrator(scene):
     """The equations of motion alone (build_system keeps only the parameters they read)."""
     system = build_system(scene, DOUBLE, events=False)
-    return system, hy.taylor_adaptive(system.equations, system.initial_state, pars=system.parameters)
+    return system, hy.taylor_adaptive(system.equations, system.initial_state_of(scene), pars=system.parameters)
 
 
 def event_integrator(scene):
@@ -64,15 +64,15 @@ def event_integrator(scene):
     events, nt_events = mode_events(system, cooldown, slots, nt_slots)
     slots[:] = [lambda ta, d_sgn: True] * len(events)
     nt_slots[:] = [lambda ta, t, d_sgn: None] * len(nt_events)
-    ta = hy.taylor_adaptive(system.equations, system.initial_state, t_events=events, nt_events=nt_events)
+    ta = hy.taylor_adaptive(system.equations, system.initial_state_of(scene), t_events=events, nt_events=nt_events)
     ta.pars[:] = system.parameters[: len(ta.pars)]
     return system, ta, len(events) + len(nt_events)
 
 
-def propagate_from_start(system, ta, t_end: float) -> int:
+def propagate_from_start(scene, system, ta, t_end: float) -> int:
     """Steps taken from the scene's initial state to t_end."""
     ta.time = 0.0
-    ta.state[:] = system.initial_state
+    ta.state[:] = system.initial_state_of(scene)
     if ta.with_events:
         ta.reset_cooldowns()
     return ta.propagate_until(t_end)[3]
@@ -89,8 +89,8 @@ def main(argv=None) -> None:
     watched_system, watched, n_events = event_integrator(scene)
     heyroll.simulate(scene, t_end=1.0)  # compiles (and caches) simulate's integrator
 
-    t_bare, steps_bare = best_of(lambda: propagate_from_start(bare_system, bare, args.t_end), args.repeat)
-    t_events, steps_events = best_of(lambda: propagate_from_start(watched_system, watched, args.t_end), args.repeat)
+    t_bare, steps_bare = best_of(lambda: propagate_from_start(scene, bare_system, bare, args.t_end), args.repeat)
+    t_events, steps_events = best_of(lambda: propagate_from_start(scene, watched_system, watched, args.t_end), args.repeat)
     t_full, result = best_of(lambda: heyroll.simulate(scene, t_end=args.t_end, max_collisions=None), args.repeat)
     n = result.n_collisions
     if n == 0:

@@ -93,6 +93,16 @@ class Body:
     kappa: mpmath.mpf
     shape: Shape | None = None
 
+    def __hash__(self) -> int:  # bodies key the engine's caches (Scene.constants): mpf hashing once
+        cached = self.__dict__.get("_hash")
+        if cached is None:
+            cached = hash((self.radius, self.mass, self.kappa, self.shape))
+            object.__setattr__(self, "_hash", cached)
+        return cached
+
+    def __getstate__(self) -> dict:  # str hashes (the shape) differ between processes: not pickled
+        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
+
     @classmethod
     def of_shape(
         cls,

@@ -24,7 +24,7 @@ from .forcing import Forcing
 from .frame import STATIONARY, Frame
 from .laws import CollisionLaw, HedrihRollingLaw, ImpulseMap, conserves_mechanical_energy_bound, impulse_map
 from .laws.base import check_restitution
-from .tracks import Track, first_integral, mechanical_energy
+from .tracks import Track, first_integral
 
 STANDARD_GRAVITY = "9.81"
 
@@ -104,6 +104,21 @@ class Scene:
             object.__setattr__(self, "_hash", cached)
         return cached
 
+    @property
+    def constants(self) -> "SceneConstants":
+        """Everything of the scene but its state (q, dq, slip), its name and its run settings.
+
+        What the engine compiles and precomputes (systems, collision maps, time
+        scales) depends on these alone, so scenes that differ only in their
+        start (a sweep over initial conditions, a basin) share it: the engine's
+        caches are keyed by this, built once per scene.
+        """
+        cached = self.__dict__.get("_constants")
+        if cached is None:
+            cached = SceneConstants.interned(tuple(getattr(self, name) for name in _CONSTANT_FIELDS))
+            object.__setattr__(self, "_constants", cached)
+        return cached
+
     g: mpmath.mpf
     track: Track
     bodies: tuple[Body, ...]
@@ -172,9 +187,7 @@ class Scene:
         law = law if law is not None else HedrihRollingLaw()
         for n, body in enumerate(bodies, start=1):
             track.check_body(body, f"bodies[{n}]")
-        c = track.coordinate
-        qs = tuple(_finite(p, f"bodies[{n}].{c}") for n, p in enumerate(q, start=1))
-        dqs = tuple(_finite(v, f"bodies[{n}].d{c}") for n, v in enumerate(dq, start=1))
+        qs, dqs = _state(track, q, dq)
         mu = None
         if friction is not None:
             if not is_finite(friction) or to_mpf(friction) < 0:
@@ -188,16 +201,7 @@ class Scene:
                 raise SceneError("track.static_friction",
                                  f"must be a finite number >= track.friction = {mpmath.nstr(mu, 17)}, got {static_friction!r}")
             mu_s = to_mpf(static_friction)
-        slips = tuple(mpmath.mpf(0) for _ in bodies)
-        if slip is not None:
-            if len(slip) != len(bodies):
-                raise SceneError("bodies", "need one slip per body")
-            slips = tuple(_finite(w, f"bodies[{n}].slip") for n, w in enumerate(slip, start=1))
-            for n, (w, body) in enumerate(zip(slips, bodies), start=1):
-                if w != 0 and mu is None:
-                    raise SceneError(f"bodies[{n}].slip", "a body can slip only on a rough track: give track.friction")
-                if w != 0 and (body.is_particle or body.kappa == 1):
-                    raise SceneError(f"bodies[{n}].slip", "only a rolling body (kappa > 1, r > 0) has a slip velocity")
+        slips = _slips(slip, bodies, mu)
         if on_inconsistent not in INCONSISTENCY_POLICIES:
             raise SceneError(
                 "collision.on_inconsistent",
@@ -215,16 +219,44 @@ class Scene:
             track_friction=mu, on_inconsistent=on_inconsistent, track_sides=track_sides, frame=frame,
             limiter_restitution=k_lim, static_friction=mu_s, slip=slips, forcing=forcing,
         )
-        scene._check_finite_energies()
-        pairs = scene._linear_gap_pairs() if track.linear_gap else scene._open_pairs()
-        object.__setattr__(scene, "pairs", pairs)
-        return scene
+        return scene._with_checked_state()
 
-    def _check_finite_energies(self) -> None:
+    def with_state(self, q=None, dq=None, slip=None) -> "Scene":
+        """This scene started elsewhere: new coordinates ``q``, rates ``dq`` and slips (None: as now).
+
+        The same scene as :meth:`make` gives with those values (equal, and so
+        with the same results), checked by the same rules, but only those of
+        the state: the constants (bodies, track, law) were checked when this
+        scene was made, and the contact pairs' constants are kept (a sweep over
+        initial conditions builds a point in microseconds, not milliseconds).
+        """
+        n = len(self.bodies)
+        for name, values in (("q", q), ("dq", dq), ("slip", slip)):
+            if values is not None and len(values) != n:
+                raise SceneError("bodies", f"need one {name} per body, got {len(values)} for {n} bodies")
+        qs, dqs = _state(self.track, self.q if q is None else q, self.dq if dq is None else dq)
+        slips = self.slip if slip is None else _slips(slip, self.bodies, self.track_friction)
+        scene = Scene(g=self.g, track=self.track, bodies=self.bodies, q=qs, dq=dqs, law=self.law, run=self.run,
+                      name=self.name, track_friction=self.track_friction, on_inconsistent=self.on_inconsistent,
+                      track_sides=self.track_sides, frame=self.frame, limiter_restitution=self.limiter_restitution,
+                      static_friction=self.static_friction, slip=slips, forcing=self.forcing)
+        object.__setattr__(scene, "_constants", self.constants)
+        return scene._with_checked_state(self.pairs)
+
+    def _with_checked_state(self, pairs_of=None) -> "Scene":
+        """Check the rules of the state and set the contact pairs (their constants from ``pairs_of``,
+        a scene's of the same constants, where given); returns self."""
+        self._check_finite_energies(constants_checked=pairs_of is not None)
+        pairs = self._linear_gap_pairs(pairs_of) if self.track.linear_gap else self._open_pairs(pairs_of)
+        object.__setattr__(self, "pairs", pairs)
+        return self
+
+    def _check_finite_energies(self, constants_checked: bool = False) -> None:
         """Refuse scenes whose energies overflow a double (measured: track.radius = 1e308 ran to
-        'completed' with infinite energies and nan in the table; dphi = 1e200 ended in a traceback)."""
+        'completed' with infinite energies and nan in the table; dphi = 1e200 ended in a traceback).
+        ``constants_checked``: the generalized masses and weight moments were (with_state)."""
         for n, body in enumerate(self.bodies):
-            if self.track.linear_gap:  # the engine works with G = kappa m rho^2 and W = m g rho in the run's type
+            if self.track.linear_gap and not constants_checked:  # the engine works with G = kappa m rho^2 and W = m g rho
                 for name, value in (("generalized mass kappa m (R - r)^2", self.track.generalized_mass(body)),
                                     ("weight moment m g (R - r)", self.track.weight_moment(body, self.g))):
                     if not math.isfinite(float(value)):
@@ -232,8 +264,12 @@ class Scene:
                                          "not a finite double: the radius, the masses or g are out of range")
             with np.errstate(all="ignore"):  # an overflow is what is checked here, not a warning
                 try:
-                    total = float(self.body_energy(n))
-                    at_rest = float(self.body_energy(n, dphi=0))
+                    if self._energy_at_model_precision:
+                        kinetic, potential = self._circle_energy(n)
+                        total, at_rest = float(kinetic + potential), float(potential)
+                    else:
+                        total = float(self.body_energy(n))
+                        at_rest = float(self.body_energy(n, dphi=0))
                 except OverflowError:  # Python floats raise it (Omega^2 of a frame at 1e154 rad/s: fuzz)
                     total = at_rest = math.inf
             if not math.isfinite(at_rest):
@@ -302,8 +338,9 @@ class Scene:
         d = self.track.domain(self.bodies[n])
         return None if d is None else (float(d[0]), float(d[1]))
 
-    def _open_pairs(self) -> tuple[ContactPair, ...]:
-        """Neighbours along an open track; the law compiled once where the metric is constant."""
+    def _open_pairs(self, pairs_of=None) -> tuple[ContactPair, ...]:
+        """Neighbours along an open track; the law compiled once where the metric is constant
+        (``pairs_of``: the pairs of a scene of the same constants, whose law maps serve)."""
         c = self.track.coordinate
         for n in range(len(self.bodies)):
             lo, hi = self.track.domain(self.bodies[n])
@@ -325,15 +362,40 @@ class Scene:
             if gap < 0:
                 raise SceneError(f"bodies[{j + 1}].{c}", f"body {j + 1} overlaps body {i + 1} (gap {gap:.3g} m)")
             law_map = None
-            if self.track.constant_metric:
+            if pairs_of is not None:
+                law_map = pairs_of[i].law_map
+            elif self.track.constant_metric:
                 law_map = impulse_map(self.law, self.bodies[i], self.bodies[j], self.sigma(i), self.sigma(j))
             pairs.append(ContactPair(i=i, j=j, law_map=law_map))
         return tuple(pairs)
 
-    def _linear_gap_pairs(self) -> tuple[ContactPair, ...]:
+    def _linear_gap_pairs(self, pairs_of=None) -> tuple[ContactPair, ...]:
+        """Neighbours around the circle, the wrap-around pair last; ``pairs_of``: the pairs of a scene
+        of the same constants, whose contact angles, law maps and least contact energies serve."""
         n = len(self.bodies)
         if n == 1:
             return ()
+        neighbours = [(i, i + 1) for i in range(n - 1)] + [(n - 1, 0)]
+        constants = self._circle_pair_constants() if pairs_of is None else pairs_of.constants
+        energy = self.total_energy()
+        pairs = []
+        for (i, j), (beta, offset, law_map, least_energy) in zip(neighbours, constants):
+            with workprec():
+                gap = self.phi[j] + offset - self.phi[i] - beta
+            if gap < 0:
+                raise SceneError(
+                    f"bodies[{j + 1}].phi",
+                    f"bodies {i + 1} and {j + 1} overlap at start (gap {mpmath.nstr(gap, 6)} rad < 0): list bodies "
+                    f"counter-clockwise with neighbours at least beta = {mpmath.nstr(beta, 10)} rad apart",
+                )
+            reachable = least_energy is None or energy >= least_energy
+            pairs.append(ContactPair(i=i, j=j, beta=beta, offset=offset, law_map=law_map, reachable=reachable))
+        return ScenePairs(pairs, constants=constants)
+
+    def _circle_pair_constants(self) -> tuple:
+        """Per neighbour pair on the circle: (beta, offset, law map, the least energy that lets it touch
+        less 1e-9 relative, or None where every pair is watched); the rules of the bodies' fit checked."""
+        n = len(self.bodies)
         neighbours = [(i, i + 1) for i in range(n - 1)] + [(n - 1, 0)]
         betas = []
         for i, j in neighbours:
@@ -351,35 +413,18 @@ class Scene:
         energy_bounded = all(
             conserves_mechanical_energy_bound(self.law, self.bodies[i], self.bodies[j], sigma[i], sigma[j])
             for i, j in neighbours
-        )
-        energy = self.total_energy()
-        pairs = []
+        ) and not self.frame.rotating and self.forcing is None
+        constants = []
         for (i, j), beta in zip(neighbours, betas):
             wraps = j == 0
             offset = 2 * mpmath.pi if wraps else mpmath.mpf(0)
             with workprec():
                 offset = +offset
-                gap = self.phi[j] + offset - self.phi[i] - beta
-            if gap < 0:
-                raise SceneError(
-                    f"bodies[{j + 1}].phi",
-                    f"bodies {i + 1} and {j + 1} overlap at start (gap {mpmath.nstr(gap, 6)} rad < 0): list bodies "
-                    f"counter-clockwise with neighbours at least beta = {mpmath.nstr(beta, 10)} rad apart",
-                )
-            reachable = True
-            if energy_bounded and not self.frame.rotating and self.forcing is None:
-                reachable = energy >= self._least_contact_energy(i, j, beta, wraps) * (1 - mpmath.mpf(10) ** -9)
-            pairs.append(
-                ContactPair(
-                    i=i,
-                    j=j,
-                    beta=beta,
-                    offset=offset,
-                    law_map=impulse_map(self.law, self.bodies[i], self.bodies[j], sigma[i], sigma[j]),
-                    reachable=reachable,
-                )
-            )
-        return tuple(pairs)
+            least = self._least_contact_energy(i, j, beta, wraps) * (1 - mpmath.mpf(10) ** -9) \
+                if energy_bounded else None
+            constants.append((beta, offset, impulse_map(self.law, self.bodies[i], self.bodies[j], sigma[i], sigma[j]),
+                              least))
+        return tuple(constants)
 
     def _least_contact_energy(self, i: int, j: int, beta, wraps: bool):
         """A lower bound on the energy the system needs for pair (i, j) to touch.
@@ -405,16 +450,36 @@ class Scene:
         body = self.bodies[n]
         q = self.q[n] if phi is None else phi
         dq = self.dq[n] if dphi is None else dphi
-        if not self.track.linear_gap or self.frame.rotating:
+        if not self._energy_at_model_precision:
             return to_mpf(float(first_integral(self.track, body, float(q), float(dq), self.g, self.frame)))
+        kinetic, potential = self._circle_energy(n, phi, dphi)
         with workprec():
-            return mechanical_energy(
-                self.track.generalized_mass(body),
-                self.track.weight_moment(body, self.g),
-                self.phi[n] if phi is None else phi,
-                self.dphi[n] if dphi is None else dphi,
-                mpmath.sin,
-            )
+            return kinetic + potential
+
+    @property
+    def _energy_at_model_precision(self) -> bool:
+        return self.track.linear_gap and not self.frame.rotating
+
+    def _circle_energy(self, n: int, phi=None, dphi=None) -> tuple:
+        """(1/2 G phi'^2, W (1 - cos phi)) of body n on a fixed circle at model precision (eq. 26; the
+        terms of mechanical_energy), body n's own state by default (computed once per scene)."""
+        own = phi is None and dphi is None
+        if own:
+            cached = self.__dict__.setdefault("_circle_energies", {})
+            if n in cached:
+                return cached[n]
+        moments = self.constants.memo.get("circle_moments")
+        if moments is None:  # G = kappa m rho^2, W = m g rho, once per scene constants
+            moments = self.constants.memo["circle_moments"] = tuple(
+                (self.track.generalized_mass(b), self.track.weight_moment(b, self.g)) for b in self.bodies)
+        G, W = moments[n]
+        with workprec():
+            half = mpmath.sin((self.phi[n] if phi is None else phi) / 2)
+            rate = self.dphi[n] if dphi is None else dphi
+            parts = (G * rate * rate / 2, 2 * W * half * half)
+        if own:
+            cached[n] = parts
+        return parts
 
     def height_bound(self, n: int):
         """The highest the centre of body ``n`` (0-based) can rise (m) on an open track, or None.
@@ -452,7 +517,16 @@ class Scene:
 
     def total_energy(self):
         """The bodies' mechanical energy; a rolling body that starts slipping (slip w != 0) spins at
-        u = v - w instead of v: its kinetic energy of rotation is 1/2 m (kappa - 1) u^2."""
+        u = v - w instead of v: its kinetic energy of rotation is 1/2 m (kappa - 1) u^2.
+        At model precision, computed once per scene (the checks of make and the engine's choice of
+        the events the energy can reach all ask for it)."""
+        cached = self.__dict__.get("_total_energy")
+        if cached is None:
+            cached = self._total_energy()
+            object.__setattr__(self, "_total_energy", cached)
+        return cached
+
+    def _total_energy(self):
         with workprec():
             total = mpmath.fsum(self.body_energy(n) for n in range(len(self.bodies)))
             for n, w in enumerate(self.slip):
@@ -467,6 +541,80 @@ class Scene:
         turning = f", plane turning at Omega={mpmath.nstr(self.frame.omega, 6)} rad/s" if self.frame.rotating else ""
         return (f"{self.name}: {len(self.bodies)} bodies on {self.track.describe()}{turning} ({parts}); "
                 f"law {self.law.name} k={mpmath.nstr(self.law.restitution, 6)}")
+
+
+class ScenePairs(tuple):
+    """A scene's contact pairs (a tuple of ContactPair) with the constants they were made from
+    (Scene.with_state builds a scene of the same constants from them without recomputing them)."""
+
+    def __new__(cls, pairs, constants=()):
+        made = super().__new__(cls, pairs)
+        made.constants = constants
+        return made
+
+    def __reduce__(self):
+        return (ScenePairs, (tuple(self), self.constants))
+
+
+def _state(track, q, dq) -> tuple:
+    """The coordinates and rates as model numbers, each finite (named as in a scene file)."""
+    c = track.coordinate
+    qs = tuple(_finite(p, f"bodies[{n}].{c}") for n, p in enumerate(q, start=1))
+    dqs = tuple(_finite(v, f"bodies[{n}].d{c}") for n, v in enumerate(dq, start=1))
+    return qs, dqs
+
+
+def _slips(slip, bodies, mu) -> tuple:
+    """Each body's initial slip velocity (0: rolling), checked against the bodies and the friction."""
+    if slip is None:
+        return tuple(mpmath.mpf(0) for _ in bodies)
+    if len(slip) != len(bodies):
+        raise SceneError("bodies", "need one slip per body")
+    slips = tuple(_finite(w, f"bodies[{n}].slip") for n, w in enumerate(slip, start=1))
+    for n, (w, body) in enumerate(zip(slips, bodies), start=1):
+        if w != 0 and mu is None:
+            raise SceneError(f"bodies[{n}].slip", "a body can slip only on a rough track: give track.friction")
+        if w != 0 and (body.is_particle or body.kappa == 1):
+            raise SceneError(f"bodies[{n}].slip", "only a rolling body (kappa > 1, r > 0) has a slip velocity")
+    return slips
+
+
+#: The fields of a scene that are not its state, name or run settings (Scene.constants).
+_CONSTANT_FIELDS = ("g", "track", "bodies", "law", "track_friction", "on_inconsistent", "track_sides", "frame",
+                    "limiter_restitution", "static_friction", "forcing")
+
+
+class SceneConstants:
+    """A scene's constants (Scene.constants) as a cache key: compared by value, hashed once.
+
+    Equal constants are one object (``interned``), so that the engine's caches,
+    looked up several times a run, find them by identity: comparing two scenes'
+    mpf constants by value took ~10 us a lookup (measured).
+    """
+
+    __slots__ = ("values", "_hash", "memo")
+    _seen: dict = {}
+    SEEN_LIMIT = 4096
+
+    def __init__(self, values: tuple):
+        self.values = values
+        self._hash = hash(values)
+        self.memo = {}  # values derived from the constants alone, shared by every scene that has them
+
+    @classmethod
+    def interned(cls, values: tuple) -> "SceneConstants":
+        made = cls(values)
+        seen = cls._seen.setdefault(made, made)
+        if len(cls._seen) > cls.SEEN_LIMIT:  # a bound on memory; the caches keep working by value
+            cls._seen.clear()
+        return seen
+
+    def __hash__(self) -> int:
+        return self._hash
+
+    def __eq__(self, other) -> bool:
+        return self is other or (isinstance(other, SceneConstants) and self._hash == other._hash
+                                 and self.values == other.values)
 
 
 def _finite(value, field):

@@ -6,7 +6,28 @@ shape reuse what was compiled for the first (constants are runtime parameters).
 
 from __future__ import annotations
 
+import functools
 from collections import OrderedDict
+
+
+class HashedKey:
+    """A tuple as a cache key, hashed once (a key looked up at every run of a shape)."""
+
+    __slots__ = ("values", "_hash")
+
+    def __init__(self, values: tuple):
+        self.values = values
+        self._hash = hash(values)
+
+    def __hash__(self) -> int:
+        return self._hash
+
+    def __eq__(self, other) -> bool:
+        return self is other or (isinstance(other, HashedKey) and self._hash == other._hash
+                                 and self.values == other.values)
+
+    def __repr__(self) -> str:
+        return f"HashedKey({self.values!r})"
 
 
 class CompiledCache:
@@ -29,3 +50,21 @@ class CompiledCache:
         else:
             self._entries.move_to_end(key)
         return entry
+
+
+def by_constants(size: int = 256):
+    """Cache ``f(scene, *args)`` by the scene's constants (model.scene.Scene.constants) and ``args``:
+    for what depends on a scene's bodies, track and laws but not on its state, so that scenes which
+    differ only in where they start (a sweep's points) compute it once."""
+
+    def decorate(f):
+        cache = CompiledCache(size)
+
+        @functools.wraps(f)
+        def cached(scene, *args):
+            return cache.get((scene.constants,) + args, lambda: f(scene, *args))
+
+        cached.cache = cache
+        return cached
+
+    return decorate

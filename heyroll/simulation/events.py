@@ -35,6 +35,7 @@ import numpy as np
 from ..model.laws import GeneralizedNewtonLaw, ImpulseMap, impulse_map
 from ..model._numbers import workprec
 from .resolve.friction import slipping, slipping_law
+from .compiled_cache import by_constants
 from .system import SceneSystem, overlap_tolerance, unit_acceleration, unit_jerk
 
 #: A post-collision separation rate within this many ulps of zero (relative to
@@ -588,7 +589,7 @@ def _positive_roots(c2, c1, c0) -> list:
     return sorted(r for r in roots if r > 0)
 
 
-@functools.lru_cache(maxsize=256)
+@by_constants()
 def fallback_map(scene, pair) -> ImpulseMap:
     """Newton's law on the gap rate with generalized masses, for one pair."""
     law = GeneralizedNewtonLaw(restitution=scene.law.restitution)
@@ -630,7 +631,7 @@ class WorkingMap:
     apply: Callable = field(compare=False, repr=False)
 
 
-@functools.lru_cache(maxsize=256)
+@by_constants()
 def pair_maps(scene, precision) -> tuple:
     """Per scene pair: (the law's working map, the fallback's), for ``precision``. Keyed by the scene
     (its hash is computed once) rather than by each pair's maps, whose mpf constants hashed on every

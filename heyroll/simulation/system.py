@@ -48,6 +48,7 @@ import mpmath
 from ..model._numbers import workprec
 from ..model.scene import ContactPair, Scene
 from ..model.tracks import Dynamics
+from .compiled_cache import CompiledCache, HashedKey, by_constants
 from .friction import build_friction, forcing_terms, friction_events, slides
 from .precision import Precision
 
@@ -162,8 +163,6 @@ class SceneSystem:
     #: Generalized masses G_k and weight moments W_k of the bodies, as floats.
     gen_mass: tuple[float, ...] = field(default=())
     weight: tuple[float, ...] = field(default=())
-    #: The scene's initial state in this mode's coordinates, at the run's precision.
-    initial_state: list = field(default_factory=list)
     #: Piece ends of each body on an open track (junctions and limiters) and their expressions.
     bound_events: tuple[BoundEvent, ...] = ()
     bound_expressions: list = field(default_factory=list)
@@ -225,9 +224,10 @@ class SceneSystem:
         return len(self.units)
 
     @functools.cached_property
-    def shape(self) -> tuple:
-        """Everything the compiled code depends on (constants are parameters)."""
-        return (
+    def shape(self) -> "HashedKey":
+        """Everything the compiled code depends on (constants are parameters); computed and hashed once
+        (systems are cached, and each run looks its integrator and compiled functions up by it)."""
+        return HashedKey((
             self.track_shape,
             self.particles,
             self.n_bodies,
@@ -238,7 +238,7 @@ class SceneSystem:
             self.precision.name,
             tuple((u.members, u.pinned) for u in self.units if u.pinned),
             self.extra_shape,
-        )
+        ))
 
     @property
     def coordinate(self) -> str:
@@ -292,6 +292,14 @@ class SceneSystem:
                 dphi[k] = dpsi
         return phi + dphi
 
+    def initial_state_of(self, scene: Scene) -> list:
+        """``scene``'s initial state in this mode's coordinates, at the run's precision, the slips and
+        friction work (rough tracks) at 0. (A system serves every scene of its constants and energy
+        reach, see build_system: the state is the scene's, not the system's.)"""
+        num = self.precision.number
+        full = [num(x) for x in scene.q] + [num(x) for x in scene.dq]
+        return self.reduce(full) + [num(0)] * self.n_extra
+
     def reduce(self, full_state) -> list:
         """Unit state from a full state (first member's angle and rate)."""
         n = self.n_bodies
@@ -344,7 +352,6 @@ def scene_pair(scene: Scene, i: int, j: int) -> ContactPair:
     return scene.pairs[scene_pair_index(scene, i, j)]
 
 
-@functools.lru_cache(maxsize=64)
 def build_system(
     scene: Scene,
     precision: Precision,
@@ -358,13 +365,75 @@ def build_system(
     ``units`` defaults to every body free. Gaps are watched between
     neighbouring units for the pairs in ``pairs`` (default: those the scene's
     energy can reach). ``events=False`` gives the bare equations of motion
-    (no event expressions, no parameters for them). Results are cached (scenes
-    are immutable): treat the returned lists as read-only.
+    (no event expressions, no parameters for them). Results are cached by the
+    scene's constants and what its energy can reach (:func:`energy_reach`),
+    not by its state: scenes that differ only in where they start share one
+    (a sweep's points build none). Treat the returned lists as read-only.
     """
+    units = singleton_units(len(scene.bodies)) if units is None else tuple(units)
+    watched = None if pairs is None else tuple((p.i, p.j) for p in pairs)
+    key = (scene.constants, energy_reach(scene), precision, watched, units, events)
+    return _SYSTEMS.get(key, lambda: _build_system(scene, precision, watched, units, events))
+
+
+#: Systems built, by scene constants, energy reach, precision, watched pairs, units and events.
+_SYSTEMS = CompiledCache(64)
+
+
+@dataclass(frozen=True)
+class EnergyReach:
+    """What a scene's energy lets its bodies reach: the part of its state its system depends on.
+
+    ``pairs``: whether each scene pair can touch (ContactPair.reachable);
+    ``top_half``: whether each body can get where the track's normal force can
+    vanish (the track events watched); ``ends``: whether each body can get to
+    the lower and upper end of an open track (the limiter events watched);
+    ``pieces``: the piece of an open track each body starts on.
+    """
+
+    pairs: tuple
+    top_half: tuple
+    ends: tuple
+    pieces: tuple
+
+
+@functools.lru_cache(maxsize=256)
+def energy_reach(scene: Scene) -> EnergyReach:
+    """The scene's :class:`EnergyReach` (model precision, with a 1e-9 relative margin toward watching)."""
+    track, n = scene.track, len(scene.bodies)
+    thresholds = _top_half_energies(scene)
+    energy = scene.total_energy() if thresholds else None
+    top_half = []
+    for k, body in enumerate(scene.bodies):
+        if thresholds:
+            top_half.append(bool(energy >= thresholds[k]))
+        else:
+            # An open track in a fixed plane: where its centre can rise to, can N vanish?
+            height = scene.height_bound(k)
+            top_half.append(height is None or not track.holds_below(body, _with_margin(height)))
+    open_track = track.domain(scene.bodies[0]) is not None
+    ends = tuple((_can_reach_end(scene, k, 0), _can_reach_end(scene, k, 1)) if open_track else (True, True)
+                 for k in range(n))
+    pieces = tuple(piece_of(track, b, q) for b, q in zip(scene.bodies, scene.q)) if open_track else ()
+    return EnergyReach(pairs=tuple(p.reachable for p in scene.pairs), top_half=tuple(top_half), ends=ends,
+                       pieces=pieces)
+
+
+@by_constants()
+def _top_half_energies(scene: Scene) -> tuple:
+    """On a fixed circle: the energy each body needs to rise above the horizontal diameter, where the
+    normal force can vanish (W (1 - cos phi) > W), less 1e-9 relative; () where not bounded so."""
+    if not (scene.track.linear_gap and not scene.frame.rotating and scene.forcing is None):
+        return ()
+    with workprec():
+        return tuple(scene.track.weight_moment(b, scene.g) * (1 - mpmath.mpf(10) ** -9) for b in scene.bodies)
+
+
+def _build_system(scene: Scene, precision: Precision, watched, units: tuple, events: bool) -> SceneSystem:
     n = len(scene.bodies)
-    units = singleton_units(n) if units is None else tuple(units)
     nu = len(units)
-    allowed = None if pairs is None else {id(p) for p in pairs}
+    allowed = None if watched is None else set(watched)
+    reach = energy_reach(scene)
     track, g = scene.track, scene.g
     per_body = not track.linear_gap
     unit_of = [0] * n
@@ -388,7 +457,7 @@ def build_system(
     blocks = []
     if track.domain(scene.bodies[0]) is not None:
         for k, body in enumerate(scene.bodies):
-            piece = piece_of(track, body, scene.q[k])
+            piece = reach.pieces[k]
             lo, hi = piece_bounds(track, body, piece)
             first = len(params)
             par(lo)
@@ -516,7 +585,7 @@ def build_system(
             i, j = units[a].members[-1], units[b].members[0]
             index = scene_pair_index(scene, i, j)
             pair = scene.pairs[index]
-            if allowed is not None and id(pair) not in allowed:
+            if allowed is not None and (pair.i, pair.j) not in allowed:
                 continue
             if allowed is None and not pair.reachable:
                 continue
@@ -587,10 +656,10 @@ def build_system(
             chain = len(track.junctions(scene.bodies[k])) > 0
             # Without junctions only the outermost bodies can reach a limiter, and only
             # if the energy can take them to its height.
-            if chain or (k == 0 and _can_reach_end(scene, k, 0)):
+            if chain or (k == 0 and reach.ends[k][0]):
                 bound_events.append(BoundEvent(k, "lower"))
                 bound_exprs.append(psi[at(k)] - hy.par[blocks[k].lower])
-            if chain or (k == n - 1 and _can_reach_end(scene, k, 1)):
+            if chain or (k == n - 1 and reach.ends[k][1]):
                 bound_events.append(BoundEvent(k, "upper"))
                 bound_exprs.append(hy.par[blocks[k].lower + 1] - psi[at(k)])
 
@@ -599,10 +668,8 @@ def build_system(
         # sin((nu t + psi)/2) vanishes once a forcing period, at nu t + psi = 2 pi n.
         strobe = hy.sin(par(scene.forcing.frequency / 2) * hy.time + par(scene.forcing.phase / 2))
     track_units = singleton_units(n) if per_body else units
-    track_events, track_exprs = (_track_events(scene, track_units, psi, dpsi, par, body_terms, terms)
+    track_events, track_exprs = (_track_events(scene, reach, track_units, psi, dpsi, par, body_terms, terms)
                                  if events else ([], []))
-    start = [num(x) for x in scene.q]
-    rates = [num(x) for x in scene.dq]
     if per_body:
         body_exprs = [[t.x_c, t.y_c, t.normal, t.sigma, t.driving, a] for t, a in zip(terms, accelerations)]
     else:
@@ -614,7 +681,6 @@ def build_system(
         # which wants exactly those up to the last one used).
         used = [int(m) for eq in equations for m in re.findall(r"\bp(\d+)\b", str(eq[1]))]
         del params[max(used, default=-1) + 1:]
-    slip_start = [num(0)] * (len(slip_vars) + len(work_vars))
     unit_motion = []
     if not per_body and events and (rough or scene.forcing is not None):
         for u in range(nu):
@@ -623,8 +689,6 @@ def build_system(
                            for c in range(nu)])
             unit_motion.append([acc, jerk])
     return SceneSystem(
-        initial_state=(start + rates if per_body
-                       else [start[u.members[0]] for u in units] + [rates[u.members[0]] for u in units]) + slip_start,
         equations=equations,
         parameters=params,
         units=units,
@@ -817,7 +881,7 @@ def _vars(prefix: str, n: int) -> list:
     return [made] if n == 1 else list(made)
 
 
-def _track_events(scene: Scene, units, psi, dpsi, par, body_terms, free_terms):
+def _track_events(scene: Scene, reach: EnergyReach, units, psi, dpsi, par, body_terms, free_terms):
     """Normal force and friction events, only for bodies the energy can take there.
 
     The track pushes with N (per unit mass, :class:`heyroll.model.tracks.BodyTerms`;
@@ -830,21 +894,12 @@ def _track_events(scene: Scene, units, psi, dpsi, par, body_terms, free_terms):
     energy never gets there. Bodies in a cluster are checked with these
     free-body forces (the contact force's share is not included; see README).
     """
-    tr = scene.track
-    bounded = tr.linear_gap and not scene.frame.rotating and scene.forcing is None
-    energy = scene.total_energy() if bounded else None
     mu = scene.track_friction
     events, exprs = [], []
     for u, unit in enumerate(units):
         for k, o in zip(unit.members, unit.offsets):
             body = scene.bodies[k]
-            if bounded:
-                # Above the horizontal diameter the body needs W (1 - cos phi) > W of energy.
-                reach_top_half = energy >= tr.weight_moment(body, scene.g) * (1 - mpmath.mpf(10) ** -9)
-            else:
-                # An open track in a fixed plane: where its centre can rise to, can N vanish?
-                height = scene.height_bound(k)
-                reach_top_half = height is None or not tr.holds_below(body, _with_margin(height))
+            reach_top_half = reach.top_half[k]
             # A free rolling body on a rough track slips and rolls again (simulation.friction); inside
             # a cluster slipping is not modelled: the run stops there.
             slips = mu is not None and body.kappa > 1 and unit.is_cluster

@@ -25,13 +25,12 @@ from rolling (w = 0) is therefore not taken for a new turning point.
 
 from __future__ import annotations
 
-import functools
 
 import heyoka as hy
 
 import numpy as np
 
-from ..compiled_cache import CompiledCache
+from ..compiled_cache import CompiledCache, by_constants
 from ..contact_function import evaluate
 from ..friction import MODES
 
@@ -389,7 +388,7 @@ def slipping(holder, body: int, scene) -> bool:
     return modes is not None and scene.bodies[body].kappa != 1 and modes.state.modes[body] in SLIDING
 
 
-@functools.lru_cache(maxsize=256)
+@by_constants()
 def slipping_law(scene, i: int, j: int, slip_i: bool, slip_j: bool):
     """The law of a collision where a rolling body slips: Newton's law on the rates with the
     generalized masses kappa_eff m sigma^2, kappa_eff = 1 for a body that slips (the impulse acts
