@@ -10,7 +10,7 @@ coordinate (phi, s or x, as the track says) and dq its rate.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
 import math
 
@@ -99,8 +99,8 @@ class Scene:
 
     def __hash__(self) -> int:
         cached = self.__dict__.get("_hash")
-        if cached is None:
-            cached = hash(tuple(getattr(self, f.name) for f in fields(self)))
+        if cached is None:  # (the constants' hash is computed once for every scene that has them)
+            cached = hash((self.constants, self.q, self.dq, self.slip, self.name, self.run))
             object.__setattr__(self, "_hash", cached)
         return cached
 

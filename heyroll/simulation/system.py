@@ -81,6 +81,16 @@ class Unit:
     offsets: tuple  # mpf, o_k relative to the first member (0 where the gap is not linear)
     pinned: str = ""
 
+    def __hash__(self) -> int:  # units key the systems built (build_system): mpf hashing once
+        cached = self.__dict__.get("_hash")
+        if cached is None:
+            cached = hash((self.members, self.offsets, self.pinned))
+            object.__setattr__(self, "_hash", cached)
+        return cached
+
+    def __getstate__(self) -> dict:  # str hashes (pinned) differ between processes: not pickled
+        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
+
     @property
     def is_cluster(self) -> bool:
         return len(self.members) > 1
@@ -316,7 +326,9 @@ def link_bodies(system: SceneSystem, link: ContactLink) -> tuple[int, int]:
     return members[link.position], members[link.position + 1]
 
 
+@functools.lru_cache(maxsize=128)
 def singleton_units(n: int) -> tuple[Unit, ...]:
+    """Every one of n bodies free (one tuple per n: a run's set-up looks its systems up by it)."""
     return singleton_units_of(range(n))
 
 
