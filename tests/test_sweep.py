@@ -291,10 +291,15 @@ def test_sweep_speed_study_runs_and_prints_its_report(tmp_path):
                            "--output", str(report)], capture_output=True, text=True, timeout=240)
     assert done.returncode == 0, done.stderr
     assert report.read_text(encoding="utf-8").strip() == done.stdout.strip()
-    rows = [line for line in done.stdout.splitlines() if line.startswith("| ") and "---" not in line][1:]
+    throughput, setup = done.stdout.split("## Set-up before the first step")
+    rows = [line for line in throughput.splitlines() if line.startswith("| ") and "---" not in line][1:]
     assert [r.split("|")[1].strip() for r in rows][:2] == ["loop: load + simulate", "loop: simulate only"]
     assert all(float(r.split("|")[4]) > 0 for r in rows)  # points per second
     assert [r.split("|")[7].strip() for r in rows[2:]] == ["yes"] * 3  # the loop's results, to the last bit
+    cases = [line.split("|") for line in setup.splitlines() if line.startswith("| ") and "---" not in line][1:]
+    assert [c[1].strip() for c in cases] == ["new points (Scene.with_state)", "new points (the loader)",
+                                              "one scene run again"]
+    assert all(float(c[2]) > 0 for c in cases)
 
 
 # ----------------------------------------------------------------------------- --keep lists and the estimates
