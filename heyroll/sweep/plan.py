@@ -33,7 +33,7 @@ MAX_CHUNK_POINTS = 256
 MIN_CHUNKS = 16
 
 #: Keys of a scene file's [sweep] table (the CLI's flags without dashes).
-SWEEP_TABLE_KEYS = {"vary", "values", "random", "samples", "seed", "keep", "precision"}
+SWEEP_TABLE_KEYS = {"vary", "values", "random", "samples", "seed", "keep", "precision", "batch"}
 
 #: The most impacts ``first:M`` keeps: a run handed to a sink keeps its first chunk of records in
 #: memory (RunOptions.chunk_size), and the first M impacts are read from there.
@@ -78,6 +78,7 @@ class SweepPlan:
     max_collisions: object  # ...: the scene's; None: no limit
     chunk_points: int
     precision: str = "double"  # every point's working precision (Precision.name: double, long, quad, mp:BITS)
+    batch: bool = False  # points through heyoka's batch (SIMD) integrator (heyroll.simulation.batch)
 
     @property
     def dims(self) -> tuple:
@@ -156,6 +157,8 @@ class SweepPlan:
             "chunks": list(self.chunks),
             # Only where it is not double: a store written before --precision existed is a double sweep.
             **({"precision": self.precision} if self.precision != "double" else {}),
+            # Batch results differ from scalar ones in the last bits: a store is one or the other.
+            **({"batch": True} if self.batch else {}),
         }
 
 
@@ -183,7 +186,7 @@ def read_scene(scene=None, *, scene_text: str | None = None) -> tuple:
 
 
 def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, seed=None, keep=None,
-              t_end=None, max_collisions=..., chunk_points=None, precision=None) -> SweepPlan:
+              t_end=None, max_collisions=..., chunk_points=None, precision=None, batch=None) -> SweepPlan:
     """Check a sweep's specification and build its plan (raises SweepError / SceneError, one line each).
 
     ``grid``: ("vary" | "values", "KEY=SPEC") pairs in dimension order; ``random``:
@@ -205,6 +208,10 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
         seed = table.get("seed") if seed is None else seed
         keep = table.get("keep") if keep is None else keep
         precision = table.get("precision") if precision is None else precision
+        batch = table.get("batch") if batch is None else batch
+    batch = False if batch is None else batch
+    if not isinstance(batch, bool):
+        raise SweepError("batch", f"must be true or false, got {batch!r}")
     if not isinstance(data.get("bodies"), list) or not data["bodies"] or not isinstance(data.get("track"), dict):
         raise SweepError("scene", "a sweep needs a scene with a [track] table and [[bodies]]")
     if data["track"].get("type") == "table":
@@ -266,8 +273,11 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
     if keep.strobe and not isinstance(data.get("forcing"), dict):
         raise SweepError("--keep", "strobe:M needs a forced scene (a [forcing] table): only forced runs have a "
                                    "stroboscopic section")
+    precision = parse_precision(precision)
+    if batch and precision != "double":
+        raise SweepError("--batch", f"heyoka's batch mode is double precision; this sweep is {precision}")
     return SweepPlan(data, text, source, name, tuple(axes), sample, keep, t_end, max_collisions,
-                     chunk_points, parse_precision(precision))
+                     chunk_points, precision, batch)
 
 
 @dataclass(frozen=True)

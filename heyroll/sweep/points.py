@@ -63,6 +63,7 @@ class Chunk:
     keep: Keep
     n_bodies: int
     precision: str = "double"
+    batch: bool = False  # points of one shape through heyoka's batch (SIMD) integrator (simulation.batch)
 
     def __post_init__(self):
         object.__setattr__(self, "keep", parse_keep(self.keep))  # an int: the last M impacts, as keep once was
@@ -143,9 +144,37 @@ def run_chunk(chunk: Chunk) -> dict:
         columns = empty_columns(len(chunk.values), chunk.n_bodies, chunk.keep)
         options = RunOptions(t_end=chunk.t_end, max_collisions=chunk.max_collisions, precision=chunk.precision)
         make_scene = point_scene_maker(chunk.data, chunk.keys, chunk.default_name)
-        for row, values in enumerate(chunk.values):
-            _run_point(chunk, make_scene, values, options, columns, row)
+        if chunk.batch:
+            _run_batch(chunk, make_scene, options, columns)
+        else:
+            for row, values in enumerate(chunk.values):
+                _run_point(chunk, make_scene, values, options, columns, row)
         return columns
+
+
+def _run_batch(chunk: Chunk, make_scene, options: RunOptions, columns: dict) -> None:
+    """The chunk's points through simulation.batch.simulate_batch (each point's records in memory);
+    where the batch run raises, every point of the chunk runs alone."""
+    from ..simulation.batch import simulate_batch
+
+    scenes = []
+    for row, values in enumerate(chunk.values):
+        try:
+            scenes.append((row, make_scene(values)))
+        except SceneError as exc:
+            columns["status"][row], columns["message"][row] = INVALID_SCENE, str(exc)
+    try:
+        results = simulate_batch([scene for _row, scene in scenes], options)
+    except (ArithmeticError, RuntimeError, ValueError):
+        for row, _scene in scenes:
+            _run_point(chunk, make_scene, chunk.values[row], options, columns, row)
+        return
+    keep = chunk.keep
+    m = max(keep.impacts, PERIOD_TAIL if keep.period else 0)
+    for (row, scene), result in zip(scenes, results):
+        if result.status is Status.INTERRUPTED:
+            raise KeyboardInterrupt
+        _store_point(chunk, scene, result, result.collision_table()[-m:] if m else None, columns, row)
 
 
 def point_scene_maker(data: dict, keys: tuple, default_name: str):
@@ -214,6 +243,12 @@ def _run_point(chunk: Chunk, make_scene, values: tuple, options: RunOptions, col
         return
     if result.status is Status.INTERRUPTED:
         raise KeyboardInterrupt
+    _store_point(chunk, scene, result, sink.table() if (keep.impacts or keep.period) else None, columns, row)
+
+
+def _store_point(chunk: Chunk, scene, result, tail, columns: dict, row: int) -> None:
+    """Row ``row`` of the columns from a point's result; ``tail``: its last collision-table rows (impacts, period)."""
+    keep = chunk.keep
     columns["status"][row], columns["message"][row] = result.status.value, result.message
     columns["collisions"][row] = result.n_collisions
     columns["t_final"][row] = float(result.t_final)
@@ -221,7 +256,6 @@ def _run_point(chunk: Chunk, make_scene, values: tuple, options: RunOptions, col
     columns["energy_final"][row] = result.energy_final
     columns["final_state"][row] = np.asarray(result.final_state, dtype=float)
     if keep.impacts or keep.period:
-        tail = sink.table()
         if keep.impacts:
             table = tail[-keep.impacts:]
             for c in IMPACT_COLUMNS:

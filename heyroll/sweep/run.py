@@ -48,7 +48,7 @@ class SweepOutcome:
 
 def run_sweep(scene=None, *, scene_text=None, vary=None, values=None, random=None, samples=None, seed=None,
               keep=None, out="heyroll-sweep", workers=None, scheduler=None, client=None, t_end=None,
-              max_collisions=..., progress=False, figures=False, chunk_points=None, precision=None):
+              max_collisions=..., progress=False, figures=False, chunk_points=None, precision=None, batch=None):
     """Run a sweep and return its store as an xarray Dataset (README, "Sweeps").
 
     ``scene``: a scene file path (None: the default scene) or ``scene_text``.
@@ -59,7 +59,9 @@ def run_sweep(scene=None, *, scene_text=None, vary=None, values=None, random=Non
     draws random points instead. Without any, the scene file's [sweep] table
     says. ``keep``: a comma list (or a list) of "summary", "impacts:M",
     "first:M", "strobe:M", "period", "lyapunov", "rotation". ``precision``:
-    "double" (default), "long", "quad" or "mp:BITS", every point's. The store is ``out``/sweep.zarr;
+    "double" (default), "long", "quad" or "mp:BITS", every point's. ``batch``: points
+    of one shape through heyoka's batch (SIMD) integrator (README, "Sweeps": faster, not the
+    scalar run's last bits). The store is ``out``/sweep.zarr;
     a sweep that finds its own store there (same spec) runs only the points
     not stored yet, and refuses another sweep's store (SweepStoreError).
     ``workers``: processes of a LocalCluster (default: all cores; 1 runs
@@ -72,10 +74,11 @@ def run_sweep(scene=None, *, scene_text=None, vary=None, values=None, random=Non
            [("values", _entry(k, v, ",")) for k, v in _items(values)]
     plan = make_plan(scene, scene_text=scene_text, grid=grid, random=[_entry(k, v, ":") for k, v in _items(random)],
                      samples=samples, seed=seed, keep=keep, t_end=t_end, max_collisions=max_collisions,
-                     chunk_points=chunk_points, precision=precision)
+                     chunk_points=chunk_points, precision=precision, batch=batch)
     given = dict(scene=None if scene is None else str(scene), vary=vary, values=values, random=random,
                  samples=samples, seed=seed, keep=keep, t_end=t_end,
-                 max_collisions=None if max_collisions is ... else max_collisions, precision=precision)
+                 max_collisions=None if max_collisions is ... else max_collisions, precision=precision,
+                 batch=batch)
     command = "heyroll.sweep.run_sweep(" + ", ".join(f"{k}={v!r}" for k, v in given.items() if v is not None) + ")"
     outcome = execute(plan, Path(out), workers=workers, scheduler=scheduler, client=client, progress=progress,
                       command=command)
@@ -143,6 +146,7 @@ def execute(plan: SweepPlan, out: Path, *, workers=None, scheduler=None, client=
         "command": command,
         "coordinate": plan.coordinate,
         "precision": plan.precision,
+        "batch": plan.batch,
     }
     with _executor(len(pending), workers, scheduler, client) as (submit, dashboard):
         if dashboard and report is not None:
@@ -165,7 +169,7 @@ def execute(plan: SweepPlan, out: Path, *, workers=None, scheduler=None, client=
 
 def _chunk(plan: SweepPlan, first: int, count: int) -> Chunk:
     return Chunk(plan.data, plan.default_name, plan.keys, tuple(plan.point_values(p) for p in range(first, first + count)),
-                 plan.t_end, plan.max_collisions, plan.keep, plan.n_bodies, plan.precision)
+                 plan.t_end, plan.max_collisions, plan.keep, plan.n_bodies, plan.precision, plan.batch)
 
 
 def _in_process(plan: SweepPlan, pending: list):

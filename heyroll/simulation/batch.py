@@ -1,0 +1,273 @@
+"""Many scenes of one shape advanced together by heyoka's batch (SIMD) integrator (issue 16, item 3).
+
+heyoka's batch mode integrates B copies of one system at once (B = its
+recommended SIMD width, 4 doubles with AVX2), each copy with its own state,
+parameters, time, step size and events. Here each copy is one scene: the
+collision callbacks, the contact criterion and the reopening check are those
+of a scalar run (events.mode_handlers), one set per batch element, and a
+scene that stops (max_collisions, t_end) leaves its element to the next one.
+
+What runs here: double precision, a circle in a fixed plane, no friction and
+no forcing, every body free for the whole run, only gap events (the engine's
+circle hot path). A scene this path cannot run as a scalar run would (it
+starts in contact, it would enter persistent contact, a collision was
+missed, the integrator failed, options it does not take) runs through
+:func:`heyroll.simulation.driver.simulate` instead, from its start: the
+result is then the scalar one, and says so in ``settings["batch"]``.
+
+Not the same bits as a scalar run: heyoka's batch code evaluates the Taylor
+polynomials in vector registers, and its rounding differs from the scalar
+code's in the last bit now and then (measured: x'' = -x, identical steps,
+the state one ulp apart after 25 steps). Collision times of a batch run agree
+with the scalar run's to a few ulps at first; a chaotic motion then takes
+the two apart as it takes any two runs apart. validation/sweep_speed.py
+measures the largest difference.
+"""
+
+from __future__ import annotations
+
+import gc
+import time
+from dataclasses import dataclass, field
+
+import heyoka as hy
+import numpy as np
+
+from ..model.table import is_table
+from .compiled_cache import CompiledCache
+from .driver import (
+    STEP_CHUNK, ModeChange, RunOptions, _overlap, _start, _status, motion_time_scale, records_to_arrays, simulate,
+)
+from .events import CollisionLog, mode_handlers
+from .result import SimulationResult, Status
+
+#: Batch integrators already built, by system shape, width and cooldown.
+_BATCHES = CompiledCache(8)
+
+
+def batch_reason(scene, options: RunOptions) -> str:
+    """'' where the batch path runs ``scene`` with ``options``; else why it runs scalar (one line)."""
+    if is_table(scene):
+        return "a table scene (billiards) runs on the table engine"
+    if options.precision.name != "double":
+        return f"heyoka's batch mode is double precision; this run is {options.precision.name}"
+    if options.dense or options.watch_all_contacts or options.fast_math or options.high_accuracy \
+            or options.tolerance is not None:
+        return "dense output, watch_all_contacts, fast_math, high_accuracy and tolerance run scalar"
+    if not scene.track.linear_gap or scene.frame.rotating or scene.forcing is not None or scene.rough:
+        return "only a circle in a fixed plane without friction or forcing runs in batch"
+    start = _start(scene, options.precision, False)
+    if start.limit or any(u.is_cluster for u in start.units):
+        return "the scene starts in contact or where the track cannot hold it"
+    system = start.system
+    if (system.guard_expressions or system.track_events or system.links or system.bound_events
+            or system.release_events or system.strobe_expression is not None or system.friction_blocks
+            or not system.gap_reopening):
+        return "its events are not the gap events alone (track forces, limiters, guards)"
+    return ""
+
+
+@dataclass
+class _Point:
+    """A scene in a batch element: its run's log, handlers and state view."""
+
+    number: int
+    scene: object
+    system: object
+    log: CollisionLog
+    holder: list
+    handlers: list
+    started: float
+    steps: int = 0
+    initial_state: np.ndarray = field(default=None)
+
+
+class _Element:
+    """What a scalar run's callbacks read of the integrator (its time), for one batch element.
+
+    heyoka's batch time arrays are live views of its buffers: read once, indexed at every event
+    (ta.dtime builds the two views anew: 1.3 us, measured, a collision's third)."""
+
+    __slots__ = ("hi", "lo", "index")
+
+    def __init__(self, ta, index: int):
+        (self.hi, self.lo), self.index = ta.dtime, index
+
+    @property
+    def dtime(self) -> tuple:
+        return float(self.hi[self.index]), float(self.lo[self.index])
+
+    @property
+    def time(self) -> float:
+        return float(self.hi[self.index])
+
+
+def simulate_batch(scenes, options: RunOptions | None = None, *, width: int | None = None) -> list[SimulationResult]:
+    """Run ``scenes`` (any mix) and return their results in order, with the options of one
+    :func:`simulate` each. Scenes the batch path takes (:func:`batch_reason`) share batch
+    integrators of ``width`` elements (default heyoka.recommended_simd_size()), one per system shape;
+    the others run through :func:`simulate`. ``settings["batch"]`` of each result says which.
+    """
+    options = options or RunOptions()
+    width = width or hy.recommended_simd_size()
+    results: list = [None] * len(scenes)
+    groups: dict = {}
+    for number, scene in enumerate(scenes):
+        why = batch_reason(scene, options)
+        if why:
+            results[number] = _scalar(scene, options, why)
+            continue
+        system = _start(scene, options.precision, False).system
+        cooldown = options.precision.epsilon * motion_time_scale(scene)
+        groups.setdefault((system.shape, cooldown), []).append(number)
+    for (shape, cooldown), numbers in groups.items():
+        _run_group([scenes[n] for n in numbers], numbers, options, width, cooldown, results)
+    return results
+
+
+def _scalar(scene, options, why: str) -> SimulationResult:
+    result = simulate(scene, options)
+    result.settings["batch"] = f"scalar: {why}"
+    return result
+
+
+def _run_group(scenes, numbers, options, width, cooldown, results) -> None:
+    """The scenes of one shape through one batch integrator, each element taking the next scene."""
+    precision = options.precision
+    first = _start(scenes[0], precision, False).system
+    ta, slots = _batch_integrator(first, width, cooldown)
+    t_end_of = [float(s.run.t_end if options.t_end is None else options.t_end) for s in scenes]
+    queue = list(range(len(scenes)))
+    queue.reverse()
+    running: list = [None] * width
+    hi, lo = (np.array(a) for a in ta.dtime)
+    targets = np.zeros(width)
+
+    def load(index: int) -> None:
+        """The next scene of the queue into element ``index`` (or the element idles at its time)."""
+        while queue:
+            k = queue.pop()
+            point = _load(scenes[k], numbers[k], index, ta, slots, options)
+            if point is None:  # its start needs the scalar engine's modes
+                results[numbers[k]] = _scalar(scenes[k], options, "it starts with a contact to settle")
+                continue
+            running[index] = (k, point)
+            hi[index], lo[index] = 0.0, 0.0
+            ta.set_dtime(hi, lo)
+            targets[index] = t_end_of[k]
+            return
+        running[index] = None
+        targets[index] = ta.time[index]
+
+    gc_was_enabled = gc.isenabled()
+    gc.disable()  # as in a scalar run (driver._propagate): the logs grow by small lists, no cycles
+    try:
+        for index in range(width):
+            hi, lo = (np.array(a) for a in ta.dtime)
+            load(index)
+        while any(r is not None for r in running):
+            ta.propagate_until(targets, max_steps=STEP_CHUNK)
+            hi, lo = (np.array(a) for a in ta.dtime)
+            for index, (outcome, _hmin, _hmax, steps) in enumerate(ta.propagate_res):
+                if running[index] is None:
+                    continue
+                k, point = running[index]
+                point.steps += int(steps)
+                stop = point.log.stop.reason
+                failed = outcome == hy.taylor_outcome.err_nf_state or (
+                    outcome == hy.taylor_outcome.step_limit and steps == 0)
+                if stop is None and not failed and hi[index] < targets[index]:
+                    # On its way: STEP_CHUNK steps a call, or another element's run stopped the batch's.
+                    continue
+                if stop == "max_collisions" or (stop is None and not failed):
+                    results[numbers[k]] = _result(point, ta, index, hy.taylor_outcome.time_limit, t_end_of[k],
+                                                  options)
+                else:  # persistent contact, a missed collision, an integrator failure: the scalar engine's
+                    results[numbers[k]] = _scalar(scenes[k], options,
+                                                  f"the batch run stopped ({stop or outcome!s})")
+                load(index)
+    finally:
+        if gc_was_enabled:
+            gc.enable()
+
+
+def _load(scene, number, index, ta, slots, options):
+    """Element ``index`` set to ``scene``'s start and its callbacks; None where the start settles contacts."""
+    precision = options.precision
+    start = _start(scene, precision, False)
+    system = start.system
+    limit = scene.run.max_collisions if options.max_collisions is ... else options.max_collisions
+    events = 100_000_000 if options.max_events is ... else options.max_events
+    collision_limit = limit if events is None else events if limit is None else min(limit, events)
+    log = CollisionLog(max_collisions=collision_limit, max_events=events, record_modes=None)
+    holder: list = [None, None, None]
+    element = _Element(ta, index)
+    handlers, _warnings, settle = mode_handlers(scene, system, log, holder, motion_time_scale(scene), list(start.pieces))
+    params = list(system.parameters)
+    ta.pars[:, index] = params[: ta.pars.shape[0]]
+    state = system.initial_state_of(scene)
+    ta.state[:, index] = state
+    holder[0], holder[1] = ta.state[:, index], np.array(params)
+    touched = getattr(settle, "touched", [])
+    touched[:] = [(0.0, 0.0)] * len(touched)
+    ta.reset_cooldowns(index)
+    if limit == 0:
+        return None
+    settled = settle(holder[0], 0.0, range(system.n_coordinates), None, set())
+    if not settled or log.records or log.stop.reason \
+            or _overlap(scene, precision, system.expand(holder[0].tolist()), "at the start of a mode"):
+        return None
+    slots[index] = [lambda d_sgn, h=h: h(element, d_sgn) for h in handlers]
+    return _Point(number=number, scene=scene, system=system, log=log, holder=holder, handlers=handlers,
+                  started=time.perf_counter(), initial_state=np.array(start.initial_state))
+
+
+def _result(point: _Point, ta, index: int, outcome, t_end: float, options) -> SimulationResult:
+    """A scalar run's result for the scene that ran in element ``index``."""
+    scene, log, precision = point.scene, point.log, options.precision
+    hi, lo = ta.dtime
+    t_final = float(hi[index]) + float(lo[index])
+    status, message = _status(log, outcome, t_end)
+    final_state = np.array(point.system.expand(ta.state[:, index].tolist()))
+    if status.success:
+        overlap = _overlap(scene, precision, final_state, "at the end of the run")
+        if overlap:
+            status, message = Status.OVERLAP, overlap
+    if log.fallbacks and status.success:
+        message += (
+            f"; {log.fallbacks} collisions left the bodies approaching under the '{scene.law.name}' law and were "
+            "resolved by Newton's law on the gap rate (law_flag = 1)"
+        )
+    times, numbers, before, after, flags = records_to_arrays(log.records, len(scene.bodies))
+    limit = scene.run.max_collisions if options.max_collisions is ... else options.max_collisions
+    return SimulationResult(
+        scene=scene, status=status, message=message, precision=precision, t_final=t_final,
+        initial_state=point.initial_state, final_state=final_state, times=times, pair_numbers=numbers,
+        pairs=scene.pairs, states_before=before, states_after=after, law_flags=flags,
+        wall_time_s=time.perf_counter() - point.started, steps=point.steps,
+        settings={"tolerance": float(precision.epsilon), "high_accuracy": False, "fast_math": False,
+                  "t_end": float(t_end), "max_collisions": limit, "max_events": log.max_events,
+                  "on_inconsistent": scene.on_inconsistent, "inconsistent_collisions": log.fallbacks,
+                  "track_sides": scene.track_sides, "warnings": [log.warnings[k] for k in sorted(log.warnings)],
+                  "batch": f"batch of {ta.batch_size} (heyoka SIMD)"},
+        total_collisions=log.count, passage_counts=(0, 0),
+        mode_changes=(ModeChange(0.0, (), tuple(point.initial_state)),),
+    )
+
+
+def _batch_integrator(system, width: int, cooldown: float):
+    """(taylor_adaptive_batch, slots) for ``system``'s shape: gap events whose callbacks call
+    ``slots[element][n](d_sgn)`` (each element's own run's handlers)."""
+
+    def build():
+        slots: list = [[] for _ in range(width)]
+
+        def forward(n):
+            return lambda ta, d_sgn, index: slots[index][n](int(d_sgn))
+
+        events = [hy.t_event_batch(gap, callback=forward(n), direction=hy.event_direction.any, cooldown=cooldown)
+                  for n, gap in enumerate(system.gap_expressions)]
+        ta = hy.taylor_adaptive_batch(system.equations, np.zeros((len(system.equations), width)), t_events=events)
+        return ta, slots
+
+    return _BATCHES.get((system.shape, width, repr(cooldown)), build)
