@@ -288,14 +288,17 @@ def test_plot_draws_the_bifurcation_diagram_of_one_key(tmp_path, capsys):
 def test_sweep_speed_study_runs_and_prints_its_report(tmp_path):
     report = tmp_path / "sweep_speed.md"
     done = subprocess.run([sys.executable, str(ROOT / "validation" / "sweep_speed.py"), "--points", "64",
-                           "--output", str(report)], capture_output=True, text=True, timeout=240)
+                           "--ensemble-points", "16", "--ensemble-collisions", "20", "--output", str(report)],
+                          capture_output=True, text=True, timeout=240)
     assert done.returncode == 0, done.stderr
     assert report.read_text(encoding="utf-8").strip() == done.stdout.strip()
     throughput, setup = done.stdout.split("## Set-up before the first step")
+    throughput = throughput.split("## Batch")[0]
     rows = [line for line in throughput.splitlines() if line.startswith("| ") and "---" not in line][1:]
     assert [r.split("|")[1].strip() for r in rows][:2] == ["loop: load + simulate", "loop: simulate only"]
     assert all(float(r.split("|")[4]) > 0 for r in rows)  # points per second
-    assert [r.split("|")[7].strip() for r in rows[2:]] == ["yes"] * 3  # the loop's results, to the last bit
+    assert [r.split("|")[7].strip() for r in rows[2:] if "batch" not in r] == ["yes"] * 3  # to the last bit
+    assert [r.split("|")[7].strip().startswith("within") for r in rows if "--batch" in r] == [True]
     cases = [line.split("|") for line in setup.splitlines() if line.startswith("| ") and "---" not in line][1:]
     assert [c[1].strip() for c in cases] == ["new points (Scene.with_state)", "new points (the loader)",
                                               "one scene run again"]
