@@ -30,6 +30,7 @@ from .model.table import (CircleBoundary, EllipseBoundary, PolygonBoundary, Rect
 # on first use, so that the model layer works (and imports fast) without them.
 _LAZY = {
     "simulate": ("heyroll.simulation.driver", "simulate"),
+    "simulate_batch": ("heyroll.simulation.batch", "simulate_batch"),
     "Precision": ("heyroll.simulation.precision", "Precision"),
     "SimulationResult": ("heyroll.simulation.result", "SimulationResult"),
     "TableResult": ("heyroll.simulation.table.result", "TableResult"),
@@ -99,4 +100,5 @@ __all__ = [
     "make_law",
     "parse_scene",
     "simulate",
+    "simulate_batch",
 ]

@@ -20,6 +20,7 @@ from heyroll.errors import SceneError
 from heyroll.interfaces.scene_file import default_scene, load_scene, read_scene_text, scene_from_dict
 from heyroll.simulation.precision import Precision
 from heyroll.simulation.system import build_system, energy_reach
+from heyroll.sweep import SweepKeyError
 from heyroll.sweep.keys import parse_key
 from heyroll.sweep.points import point_data, point_scene_maker, state_slots
 
@@ -39,6 +40,7 @@ CASES = [
     ("arc_chain.toml", ("bodies[1].s", "bodies[1].ds"), (1.01, 0.5)),
     ("rotating_curve.toml", ("bodies[1].x",), (0.9,)),
     ("rough_parabola_forced.toml", ("bodies[1].x", "bodies[1].dx"), (1.1, 0.5)),
+    ("rough_cycloid.toml", ("bodies[2].slip", "bodies[2].du"), (0.05, 0.1)),  # a disk that starts slipping
 ]
 
 
@@ -151,3 +153,15 @@ def test_a_rate_given_as_omega_or_a_body_given_by_segment_and_angle():
     make = point_scene_maker(data, parsed, "scene")
     assert make((0.25,)) == scene_from_dict(point_data(data, parsed, (0.25,)))
     assert state_slots((parse_key("bodies[1].omega", data),), data, base) is None  # converted by the loader
+
+
+def test_a_parametric_track_is_swept_by_its_own_coordinate_u():
+    """Found writing these tests: the KEYs of a parametric track's bodies were checked against an arc
+    chain's (s, ds), so bodies[N].u was refused, and the store named its state s."""
+    from heyroll.sweep.plan import make_plan
+
+    plan = make_plan(ROOT / "examples" / "rough_cycloid.toml", grid=[("vary", "bodies[2].du=0:0.2:3")])
+    assert plan.coordinate == "u" and plan.units(plan.keys[0]) == "1/s"
+    with pytest.raises(SweepKeyError) as wrong:
+        make_plan(ROOT / "examples" / "rough_cycloid.toml", grid=[("vary", "bodies[2].ds=0:0.2:3")])
+    assert "du" in str(wrong.value) and "u" in str(wrong.value)

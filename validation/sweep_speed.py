@@ -281,8 +281,10 @@ def main() -> None:
         "",
         f"{ens['points']} scenes of the default scene (bodies[1].phi over [-1.1, -0.8] rad), each to its "
         f"{args.ensemble_collisions}th collision, {ens['collisions']} collisions in all; heyoka's SIMD width "
-        f"{__import__('heyoka').recommended_simd_size()}; {ens['in_batch']} scenes ran in batch elements, the "
-        "others (their energy reaches the upper half of the circle: track events) ran scalar.",
+        f"{__import__('heyoka').recommended_simd_size()}; "
+        + ("every scene ran in a batch element." if ens["in_batch"] == ens["points"] else
+           f"{ens['in_batch']} scenes ran in batch elements, the others (their energy reaches the upper half "
+           "of the circle: track events) ran scalar."),
         "",
         "| run | collisions/s |",
         "|---|---|",

@@ -83,7 +83,7 @@ def _check(key: Key, data: dict) -> None:
         if not 1 <= index <= len(bodies):
             unknown(f"the scene has {len(bodies)} bodies, numbered 1..{len(bodies)}")
         allowed = (sf.BODY_KEYS if kind not in sf.PATH_TRACK_KEYS
-                   else sf.PATH_BODY_KEYS["curve" if kind == "curve" else "arcs"])  # three_arcs: as arcs
+                   else sf.PATH_BODY_KEYS.get(kind, sf.PATH_BODY_KEYS["arcs"]))  # three_arcs: as arcs
         numeric(path[1][0], allowed, f"bodies[{index}] on a {kind} track")
         if path[1][1] is not None:
             unknown(f"{path[1][0]} is not an array")
@@ -142,6 +142,7 @@ _UNITS = {
     "angle": "rad", "dangle": "rad/s", "length": "m", "start": "rad", "end": "rad", "t_end": "s",
     "max_collisions": "", "segment": "", "frequency": "rad/s", "phase": "rad", "direction": "rad",
     "omega": "rad/s",  # the frame's rotation or a body's rolling angular velocity
+    "u": "", "du": "1/s",  # a parametric track's parameter (a pure number) and its rate
 }
 #: A body's density is per volume, area or length, by its shape (README, "Bodies").
 _DENSITY = {"solid_sphere": "kg/m³", "hollow_sphere": "kg/m²", "disk": "kg/m²", "ring": "kg/m"}

@@ -40,7 +40,7 @@ SWEEP_TABLE_KEYS = {"vary", "values", "random", "samples", "seed", "keep", "prec
 MAX_FIRST = 65536
 
 #: The coordinate each track type's bodies are placed by (README: phi on a circle).
-COORDINATES = {"circle": "phi", "curve": "x", "arcs": "s", "three_arcs": "s"}
+COORDINATES = {"circle": "phi", "curve": "x", "arcs": "s", "three_arcs": "s", "parametric": "u"}
 
 
 @dataclass(frozen=True)
