@@ -3,7 +3,8 @@
 - one varied KEY, impacts kept: the bifurcation diagram, each point's last M
   impacts as small dots against the parameter: the impact position of body i
   (its coordinate; on a circle phi wrapped to [-pi, pi)) and the closing rate
-  dq_i - dq_j just before the impact;
+  dq_i - dq_j just before the impact; on a billiard table the Birkhoff
+  coordinates of the cushion impacts among them (arc length, reflection angle);
 - one varied KEY, summary only: collisions and energy loss against the parameter;
 - two varied KEYs: a map of a per-point scalar (energy loss, collisions, and
   the estimates period, lyapunov, rotation where kept) with a colour bar (a
@@ -104,6 +105,8 @@ def _save(fig, path: Path) -> Path:
 def _bifurcation(ds, key: str, path: Path, title: str) -> Path:
     import matplotlib.pyplot as plt
 
+    if "impact_boundary_s" in ds.data_vars:
+        return _billiard_bifurcation(ds, key, path, title)
     coordinate = ds.attrs.get("coordinate", "q")
     unit = COORDINATE_UNITS.get(coordinate, "")
     symbol = {"phi": "φ"}.get(coordinate, coordinate)
@@ -123,11 +126,31 @@ def _bifurcation(ds, key: str, path: Path, title: str) -> Path:
     return _save(fig, path)
 
 
-def _flat(ds, key: str, name: str) -> tuple:
-    """(parameter, value) for every filled impact slot of every point, as flat arrays."""
+def _billiard_bifurcation(ds, key: str, path: Path, title: str) -> Path:
+    """A table sweep: the Birkhoff coordinates (arc length s along the cushion, reflection angle) of
+    each point's last cushion impacts against the parameter (ball-ball impacts are left out)."""
+    import matplotlib.pyplot as plt
+
+    cushion = (ds["impact_j"] == 0) & (ds["impact_n"] > 0)
+    parameter, s = _flat(ds, key, "impact_boundary_s", cushion)
+    _, angle = _flat(ds, key, "impact_reflection_angle", cushion)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True, constrained_layout=True)
+    for ax, y, label in ((top, s, "arc length s along the cushion (m)"),
+                         (bottom, angle, "reflection angle from the normal (rad)")):
+        ax.scatter(parameter, y, s=2 if y.size < 20000 else 0.3, color="k", linewidths=0)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    bottom.set_xlabel(_label(ds, key))
+    top.set_title(f"{title}: cushion impacts among the last {ds.sizes['impact']} impacts each (Birkhoff "
+                  "coordinates)", fontsize=10)
+    return _save(fig, path)
+
+
+def _flat(ds, key: str, name: str, where=None) -> tuple:
+    """(parameter, value) for every filled impact slot of every point (of those ``where`` is true), flat."""
     values = ds[name]
     parameter = ds[key].broadcast_like(values)
-    filled = (ds["impact_n"] > 0).values
+    filled = (ds["impact_n"] > 0 if where is None else where).values
     return np.asarray(parameter.values)[filled], np.asarray(values.values, dtype=float)[filled]
 
 

@@ -20,6 +20,8 @@ from .errors import SweepKeyError
 #: Scene-file fields that hold text or tables, never a number.
 NOT_NUMERIC = {"name", "type", "sides", "y", "kind", "side", "shape", "law", "on_inconsistent", "segments", "sweep",
                "track", "bodies", "collision", "run", "frame", "forcing"}
+#: A table scene's fields that hold text or lists (heyroll.interfaces.table_file).
+TABLE_TEXT = {"boundary", "cushion_model", "vertices", "simultaneous"}
 #: Numeric fields that take whole numbers only.
 WHOLE_NUMBERS = {"segment", "max_collisions"}
 #: Two ways of giving one quantity: a point that sets one drops the other from its copy of the
@@ -70,12 +72,18 @@ def _check(key: Key, data: dict) -> None:
     def unknown(rule: str):
         raise SweepKeyError(key.text, f"unknown sweep key: {rule}")
 
+    # On a table a body's y is its centre's ordinate (on a curve track, y is the curve's expression).
+    not_numeric = (NOT_NUMERIC - {"y"}) | TABLE_TEXT if kind == "table" else NOT_NUMERIC
+
     def numeric(name: str, allowed: set, where: str):
-        if name not in allowed or name in NOT_NUMERIC:
-            numbers = sorted(k for k in allowed if k not in NOT_NUMERIC)
+        if name not in allowed or name in not_numeric:
+            numbers = sorted(k for k in allowed if k not in not_numeric)
             unknown(f"{where} has no numeric field {name!r}; numeric fields there: {', '.join(numbers)}")
 
     head, index = path[0]
+    if kind == "table":
+        _check_table(key, data, unknown, numeric)
+        return
     if head == "bodies":
         if index is None or len(path) != 2:
             unknown("name a body and a field, e.g. bodies[1].mass (bodies numbered from 1)")
@@ -119,6 +127,30 @@ def _check(key: Key, data: dict) -> None:
     numeric(path[1][0], tables[head], f"[{head}]")
 
 
+def _check_table(key: Key, data: dict, unknown, numeric) -> None:
+    """A KEY of a billiard table scene (heyroll.interfaces.table_file): a ball's field, the table's or
+    the collision law's, or g."""
+    from ..interfaces import table_file as tf
+
+    path = key.path
+    head, index = path[0]
+    if head == "bodies":
+        bodies = data.get("bodies") if isinstance(data.get("bodies"), list) else []
+        if index is None or len(path) != 2 or not 1 <= index <= len(bodies):
+            unknown(f"name a ball and a field, e.g. bodies[1].vx (the table has {len(bodies)} balls, from 1)")
+        numeric(path[1][0], tf.TABLE_BODY_KEYS, f"bodies[{index}] on a table")
+        return
+    tables = {"track": tf.TABLE_TRACK_KEYS, "collision": tf.TABLE_COLLISION_KEYS, "run": sf.RUN_KEYS}
+    if index is not None or any(i is not None for _n, i in path[1:]):
+        unknown(f"{head} is not an array")
+    if len(path) == 1:
+        numeric(head, tf.TABLE_TOP_KEYS, "the top level of a table scene")
+    elif head not in tables or len(path) != 2:
+        unknown(f"a table scene's numeric fields are in {', '.join(tables)}, bodies[N], and g")
+    else:
+        numeric(path[1][0], tables[head], f"[{head}] of a table scene")
+
+
 def apply(data: dict, key: Key, value) -> None:
     """Write ``value`` at ``key`` in ``data`` (a point's own copy of the parsed TOML), creating a missing table."""
     node = data
@@ -142,6 +174,8 @@ _UNITS = {
     "angle": "rad", "dangle": "rad/s", "length": "m", "start": "rad", "end": "rad", "t_end": "s",
     "max_collisions": "", "segment": "", "frequency": "rad/s", "phase": "rad", "direction": "rad",
     "omega": "rad/s",  # the frame's rotation or a body's rolling angular velocity
+    "y": "m", "vx": "m/s", "vy": "m/s", "wx": "rad/s", "wy": "rad/s", "a": "m", "b": "m", "width": "m",
+    "height": "m", "cushion_restitution": "",  # a table's balls and cushion
     "u": "", "du": "1/s",  # a parametric track's parameter (a pure number) and its rate
 }
 #: A body's density is per volume, area or length, by its shape (README, "Bodies").

@@ -40,7 +40,7 @@ SWEEP_TABLE_KEYS = {"vary", "values", "random", "samples", "seed", "keep", "prec
 MAX_FIRST = 65536
 
 #: The coordinate each track type's bodies are placed by (README: phi on a circle).
-COORDINATES = {"circle": "phi", "curve": "x", "arcs": "s", "three_arcs": "s", "parametric": "u"}
+COORDINATES = {"circle": "phi", "curve": "x", "arcs": "s", "three_arcs": "s", "parametric": "u", "table": "x"}
 
 
 @dataclass(frozen=True)
@@ -103,6 +103,11 @@ class SweepPlan:
     @property
     def coordinate(self) -> str:
         return COORDINATES.get(self.data["track"].get("type"), "q")
+
+    @property
+    def table(self) -> bool:
+        """A billiard table scene: balls with states (x, y, vx, vy, slip_x, slip_y) and their own impact columns."""
+        return self.data["track"].get("type") == "table"
 
     def units(self, key: Key) -> str:
         return units(key, self.data)
@@ -214,9 +219,6 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
         raise SweepError("batch", f"must be true or false, got {batch!r}")
     if not isinstance(data.get("bodies"), list) or not data["bodies"] or not isinstance(data.get("track"), dict):
         raise SweepError("scene", "a sweep needs a scene with a [track] table and [[bodies]]")
-    if data["track"].get("type") == "table":
-        raise SweepError("track.type", "sweeps of billiard tables are not supported yet: run each scene with "
-                                       "heyroll run (or simulate() in a loop)")
     if not grid and not random:
         raise SweepError("--vary", "nothing to sweep: give --vary KEY=START:STOP:N, --values KEY=v1,v2 or --random KEY=LO:HI")
     if grid and random:
@@ -270,6 +272,13 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
     else:
         chunk_points = _whole(chunk_points, "chunk_points", minimum=1, what="points per chunk")
     keep = parse_keep(keep)
+    billiards = data["track"].get("type") == "table"
+    if billiards and (keep.strobe or keep.period or keep.lyapunov or keep.rotation):
+        raise SweepError("--keep", "a table scene (billiards) keeps summary, impacts:M and first:M (its cushion "
+                                   "impacts' Birkhoff coordinates among them); period, lyapunov, rotation and strobe "
+                                   "are for tracks")
+    if billiards and batch:
+        raise SweepError("--batch", "a table scene (billiards) runs on the table engine, which has no batch mode")
     if keep.strobe and not isinstance(data.get("forcing"), dict):
         raise SweepError("--keep", "strobe:M needs a forced scene (a [forcing] table): only forced runs have a "
                                    "stroboscopic section")

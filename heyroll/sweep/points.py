@@ -31,7 +31,13 @@ ERROR = "error"
 
 #: Columns of the impacts kept per point (--keep impacts:M), from the collision table.
 IMPACT_COLUMNS = ("n", "t", "i", "j", "q_i", "q_j", "dq_i_before", "dq_j_before", "dq_i_after", "dq_j_after")
-WHOLE_IMPACT_COLUMNS = ("n", "i", "j")
+#: A table scene's (billiards): ball i's centre and velocity after the impact, and at a cushion impact
+#: (j = 0) the Birkhoff coordinates, arc length along the cushion and reflection angle.
+TABLE_IMPACT_COLUMNS = ("n", "t", "i", "j", "x_i", "y_i", "vx_i_after", "vy_i_after", "boundary_s",
+                        "reflection_angle", "law_flag")
+WHOLE_IMPACT_COLUMNS = ("n", "i", "j", "law_flag")
+#: State entries per ball of a table scene (x, y, vx, vy, slip_x, slip_y), per body elsewhere (q, dq).
+TABLE_STATE = ("x", "y", "vx", "vy", "slip_x", "slip_y")
 
 #: Period detection (--keep period): the smallest p in 1..PERIOD_MAX such that each of the last
 #: max(PERIOD_MATCHES, 2p) impacts equals the impact p before it (same pair; positions, wrapped on a
@@ -68,6 +74,10 @@ class Chunk:
     def __post_init__(self):
         object.__setattr__(self, "keep", parse_keep(self.keep))  # an int: the last M impacts, as keep once was
 
+    @property
+    def table(self) -> bool:
+        return self.data["track"].get("type") == "table"
+
 
 class LastImpacts:
     """A collision sink that counts every collision and keeps only the last ``keep`` records.
@@ -102,8 +112,17 @@ class LastImpacts:
                                      first_number=self.rows - len(times) + 1)
 
 
-def empty_columns(count: int, n_bodies: int, keep) -> dict:
-    """Columns of ``count`` points not run: '' status, -1 counts, NaN numbers, 0 body numbers."""
+def impact_columns(table: bool) -> tuple:
+    return TABLE_IMPACT_COLUMNS if table else IMPACT_COLUMNS
+
+
+def state_size(n_bodies: int, table: bool) -> int:
+    return (len(TABLE_STATE) if table else 2) * n_bodies
+
+
+def empty_columns(count: int, n_bodies: int, keep, table: bool = False) -> dict:
+    """Columns of ``count`` points not run: '' status, -1 counts, NaN numbers, 0 body numbers
+    (``table``: a billiard table's state and impact columns)."""
     keep = parse_keep(keep)
     columns = {
         "status": np.full(count, "", dtype=object),
@@ -112,11 +131,11 @@ def empty_columns(count: int, n_bodies: int, keep) -> dict:
         "t_final": np.full(count, np.nan),
         "energy_initial": np.full(count, np.nan),
         "energy_final": np.full(count, np.nan),
-        "final_state": np.full((count, 2 * n_bodies), np.nan),
+        "final_state": np.full((count, state_size(n_bodies, table)), np.nan),
     }
     for prefix, m in (("impact_", keep.impacts), ("first_impact_", keep.first)):
         if m:
-            for c in IMPACT_COLUMNS:
+            for c in impact_columns(table):
                 columns[f"{prefix}{c}"] = (np.zeros((count, m), dtype=np.int64) if c in WHOLE_IMPACT_COLUMNS
                                            else np.full((count, m), np.nan))
     if keep.strobe:
@@ -141,7 +160,7 @@ def run_chunk(chunk: Chunk) -> dict:
     chunk is stored whole or not at all.
     """
     with _ONE_AT_A_TIME:
-        columns = empty_columns(len(chunk.values), chunk.n_bodies, chunk.keep)
+        columns = empty_columns(len(chunk.values), chunk.n_bodies, chunk.keep, chunk.table)
         options = RunOptions(t_end=chunk.t_end, max_collisions=chunk.max_collisions, precision=chunk.precision)
         make_scene = point_scene_maker(chunk.data, chunk.keys, chunk.default_name)
         if chunk.batch:
@@ -235,7 +254,8 @@ def _run_point(chunk: Chunk, make_scene, values: tuple, options: RunOptions, col
         columns["status"][row], columns["message"][row] = INVALID_SCENE, str(exc)
         return
     keep = chunk.keep
-    sink = LastImpacts(max(keep.impacts, PERIOD_TAIL if keep.period else 0))
+    # A table run keeps its impacts in memory (its records are not the tracks' chunks): its tail is cut here.
+    sink = None if chunk.table else LastImpacts(max(keep.impacts, PERIOD_TAIL if keep.period else 0))
     try:
         result = simulate(scene, options, sink=sink)
     except (ArithmeticError, RuntimeError, ValueError) as exc:  # heyoka's or the driver's refusal of this point
@@ -243,7 +263,10 @@ def _run_point(chunk: Chunk, make_scene, values: tuple, options: RunOptions, col
         return
     if result.status is Status.INTERRUPTED:
         raise KeyboardInterrupt
-    _store_point(chunk, scene, result, sink.table() if (keep.impacts or keep.period) else None, columns, row)
+    tail = None
+    if keep.impacts or keep.period:
+        tail = result.collision_table()[-keep.impacts:] if sink is None else sink.table()
+    _store_point(chunk, scene, result, tail, columns, row)
 
 
 def _store_point(chunk: Chunk, scene, result, tail, columns: dict, row: int) -> None:
@@ -254,17 +277,18 @@ def _store_point(chunk: Chunk, scene, result, tail, columns: dict, row: int) -> 
     columns["t_final"][row] = float(result.t_final)
     columns["energy_initial"][row] = result.energy_initial
     columns["energy_final"][row] = result.energy_final
-    columns["final_state"][row] = np.asarray(result.final_state, dtype=float)
+    columns["final_state"][row] = np.asarray(result.state_final if chunk.table else result.final_state, dtype=float)
+    names = impact_columns(chunk.table)
     if keep.impacts or keep.period:
         if keep.impacts:
             table = tail[-keep.impacts:]
-            for c in IMPACT_COLUMNS:
+            for c in names:
                 columns[f"impact_{c}"][row, :table.size] = table[c]
         if keep.period:
             columns["period"][row], columns["period_time"][row] = impact_period(tail, angle=scene.track.kind == "circle")
     if keep.first:
         table = result.collision_table()[:keep.first]  # a run handed to a sink keeps its first chunk here
-        for c in IMPACT_COLUMNS:
+        for c in names:
             columns[f"first_impact_{c}"][row, :table.size] = table[c]
     if keep.strobe:
         strobe = result.strobe_table[-keep.strobe:]

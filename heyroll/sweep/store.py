@@ -5,7 +5,7 @@ its values as the coordinate (a random sample: a ``point`` dimension with the
 sampled values as coordinates along it); per point ``status``, ``message``,
 ``collisions``, ``t_final``, ``energy_initial``, ``energy_final``,
 ``final_state`` (dimension ``state``: phi1..phiN, dphi1..dphiN; s or x on a
-path track), and with --keep impacts:M the last M impacts as ``impact_*``
+path track; x1, y1, vx1, vy1, slip_x1, slip_y1, ... on a billiard table), and with --keep impacts:M the last M impacts as ``impact_*``
 variables with a trailing ``impact`` dimension of length M (padded: NaN, and
 0 for the body and collision numbers, where a point had fewer than M
 collisions). Attributes:
@@ -31,7 +31,7 @@ import numpy as np
 
 from .errors import SweepStoreError
 from .plan import SweepPlan
-from .points import empty_columns
+from .points import TABLE_STATE, empty_columns
 
 STORE_NAME = "sweep.zarr"
 SPEC_ATTR = "heyroll_sweep_spec"
@@ -62,6 +62,16 @@ _IMPACT = {
     "dq_j_before": ("rate of body j before the collision", "{q}/s"),
     "dq_i_after": ("rate of body i after the collision", "{q}/s"),
     "dq_j_after": ("rate of body j after the collision", "{q}/s"),
+    # a table scene's (billiards): j = 0 at a cushion impact
+    "x_i": ("x of ball i's centre at the impact", "m"),
+    "y_i": ("y of ball i's centre at the impact", "m"),
+    "vx_i_after": ("x velocity of ball i after the impact", "m/s"),
+    "vy_i_after": ("y velocity of ball i after the impact", "m/s"),
+    "boundary_s": ("cushion impacts: arc length along the cushion of the contact point, counter-clockwise "
+                   "(Birkhoff coordinate)", "m"),
+    "reflection_angle": ("cushion impacts: angle of the outgoing velocity from the inward normal, > 0 toward "
+                         "the counter-clockwise tangent (Birkhoff coordinate)", "rad"),
+    "law_flag": ("how the impact was resolved (heyroll.simulation.table.result: 0 the law)", ""),
 }
 for _prefix, _which in (("impact_", "last"), ("first_impact_", "first")):
     for _c, (_text, _units) in _IMPACT.items():
@@ -92,7 +102,7 @@ def template(plan: SweepPlan, attrs: dict):
     import xarray as xr
 
     dims, shape = plan.dims, plan.shape
-    columns = empty_columns(plan.n_points, plan.n_bodies, plan.keep)
+    columns = empty_columns(plan.n_points, plan.n_bodies, plan.keep, plan.table)
     q = plan.coordinate
     unit = COORDINATE_UNITS.get(q, "")
     variables = {}
@@ -102,8 +112,9 @@ def template(plan: SweepPlan, attrs: dict):
                            {"description": description, "units": units.format(q=unit)} if units else
                            {"description": description})
     n = plan.n_bodies
-    coords = {"state": ("state", np.array([f"{q}{k}" for k in range(1, n + 1)] + [f"d{q}{k}" for k in range(1, n + 1)],
-                                          dtype=object))}
+    names = ([f"{c}{k}" for k in range(1, n + 1) for c in TABLE_STATE] if plan.table
+             else [f"{q}{k}" for k in range(1, n + 1)] + [f"d{q}{k}" for k in range(1, n + 1)])
+    coords = {"state": ("state", np.array(names, dtype=object))}
     if plan.sample is not None:
         coords["point"] = ("point", np.arange(plan.n_points))
         for key, values in zip(plan.keys, plan.sample.values):
