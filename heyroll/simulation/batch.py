@@ -36,10 +36,11 @@ import numpy as np
 from ..model.table import is_table
 from .compiled_cache import CompiledCache
 from .driver import (
-    STEP_CHUNK, ModeChange, RunOptions, _overlap, _start, _status, motion_time_scale, records_to_arrays, simulate,
+    STEP_CHUNK, ModeChange, RunOptions, _overlap, _start, final_status, motion_time_scale, records_to_arrays,
+    run_limits, simulate,
 )
 from .events import CollisionLog, mode_handlers
-from .result import SimulationResult, Status
+from .result import SimulationResult
 
 #: Batch integrators already built, by system shape, width and cooldown.
 _BATCHES = CompiledCache(8)
@@ -136,7 +137,7 @@ def _run_group(scenes, numbers, options, width, cooldown, results) -> None:
     precision = options.precision
     first = _start(scenes[0], precision, False).system
     ta, slots = _batch_integrator(first, width, cooldown)
-    t_end_of = [float(s.run.t_end if options.t_end is None else options.t_end) for s in scenes]
+    t_end_of = [float(run_limits(s, options)[0]) for s in scenes]
     queue = list(range(len(scenes)))
     queue.reverse()
     running: list = [None] * width
@@ -196,9 +197,7 @@ def _load(scene, number, index, ta, slots, options):
     precision = options.precision
     start = _start(scene, precision, False)
     system = start.system
-    limit = scene.run.max_collisions if options.max_collisions is ... else options.max_collisions
-    events = 100_000_000 if options.max_events is ... else options.max_events
-    collision_limit = limit if events is None else events if limit is None else min(limit, events)
+    _t_end, limit, events, collision_limit = run_limits(scene, options)
     log = CollisionLog(max_collisions=collision_limit, max_events=events, record_modes=None)
     holder: list = [None, None, None]
     element = _Element(ta, index)
@@ -227,19 +226,10 @@ def _result(point: _Point, ta, index: int, outcome, t_end: float, options) -> Si
     scene, log, precision = point.scene, point.log, options.precision
     hi, lo = ta.dtime
     t_final = float(hi[index]) + float(lo[index])
-    status, message = _status(log, outcome, t_end)
     final_state = np.array(point.system.expand(ta.state[:, index].tolist()))
-    if status.success:
-        overlap = _overlap(scene, precision, final_state, "at the end of the run")
-        if overlap:
-            status, message = Status.OVERLAP, overlap
-    if log.fallbacks and status.success:
-        message += (
-            f"; {log.fallbacks} collisions left the bodies approaching under the '{scene.law.name}' law and were "
-            "resolved by Newton's law on the gap rate (law_flag = 1)"
-        )
+    _t_end, limit, events, _collisions = run_limits(scene, options)
+    status, message = final_status(scene, precision, log, outcome, t_end, final_state, limit, events)
     times, numbers, before, after, flags = records_to_arrays(log.records, len(scene.bodies))
-    limit = scene.run.max_collisions if options.max_collisions is ... else options.max_collisions
     return SimulationResult(
         scene=scene, status=status, message=message, precision=precision, t_final=t_final,
         initial_state=point.initial_state, final_state=final_state, times=times, pair_numbers=numbers,

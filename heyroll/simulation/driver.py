@@ -193,12 +193,11 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         from .table.driver import simulate_table
 
         return simulate_table(scene, opts, sink, progress)
-    t_end, max_collisions, precision = opts.t_end, opts.max_collisions, opts.precision
+    precision = opts.precision
     tolerance, high_accuracy, watch_all_contacts = opts.tolerance, opts.high_accuracy, opts.watch_all_contacts
     chunk_size = opts.chunk_size
     started = time.perf_counter()
-    t_end = scene.run.t_end if t_end is None else t_end
-    limit = scene.run.max_collisions if max_collisions is ... else max_collisions
+    t_end, limit, events, collision_limit = run_limits(scene, opts)
     if limit is not None and limit < 0:
         raise ValueError("max_collisions must be >= 0")
     pairs = scene.pairs if watch_all_contacts else None
@@ -209,9 +208,6 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
         options["tol"] = precision.number(tolerance)
     time_scale = motion_time_scale(scene)
 
-    events = DEFAULT_MAX_EVENTS if opts.max_events is ... else opts.max_events
-    # Collisions stop at whichever limit comes first; passages and mode changes check max_events.
-    collision_limit = limit if events is None else events if limit is None else min(limit, events)
     log = CollisionLog(max_collisions=collision_limit, max_events=events, record_modes=[] if scene.rough else None)
     stream = _Stream(log, sink, progress, len(scene.bodies))
     if sink is not None:
@@ -383,20 +379,8 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
     for (i, j), t_start in contacts_open.items():
         intervals.append({"i": i + 1, "j": j + 1, "t_start": t_start, "t_end": float(t_final), "open": True})
     intervals.sort(key=lambda d: (d["t_start"], d["i"]))
-    if log.stop.reason == "max_collisions" and events is not None and log.count >= events and (
-            limit is None or limit > events):
-        log.events_exhausted()  # the collisions reached max_events, not max_collisions
-    status, message = _status(log, outcome, t_end)
     final_state = np.array(full_state)
-    if status.success:
-        overlap = _overlap(scene, precision, final_state, "at the end of the run")
-        if overlap:
-            status, message = Status.OVERLAP, overlap
-    if log.fallbacks and status.success:
-        message += (
-            f"; {log.fallbacks} collisions left the bodies approaching under the '{scene.law.name}' law and were "
-            "resolved by Newton's law on the gap rate (law_flag = 1)"
-        )
+    status, message = final_status(scene, precision, log, outcome, t_end, final_state, limit, events)
     total = log.count
     if sink is not None:
         stream.flush()
@@ -805,6 +789,35 @@ def signals_deferred():
                 handler(signum, frame)
             elif handler == signal.SIG_DFL:
                 signal.raise_signal(signum)  # the default action (terminate), now that the write is whole
+
+
+def final_status(scene, precision, log, outcome, t_end, final_state, limit, events) -> tuple[Status, str]:
+    """How a run ended, (status, message): its stop or the integrator's outcome, an overlap found in the
+    final state, and the collisions the policy resolved by Newton's law."""
+    if log.stop.reason == "max_collisions" and events is not None and log.count >= events and (
+            limit is None or limit > events):
+        log.events_exhausted()  # the collisions reached max_events, not max_collisions
+    status, message = _status(log, outcome, t_end)
+    if status.success:
+        overlap = _overlap(scene, precision, final_state, "at the end of the run")
+        if overlap:
+            status, message = Status.OVERLAP, overlap
+    if log.fallbacks and status.success:
+        message += (
+            f"; {log.fallbacks} collisions left the bodies approaching under the '{scene.law.name}' law and were "
+            "resolved by Newton's law on the gap rate (law_flag = 1)"
+        )
+    return status, message
+
+
+def run_limits(scene, opts) -> tuple:
+    """(t_end, max_collisions, max_events, the collision count that stops the run) of ``opts`` for
+    ``scene`` (its [run] settings where the options leave them)."""
+    t_end = scene.run.t_end if opts.t_end is None else opts.t_end
+    limit = scene.run.max_collisions if opts.max_collisions is ... else opts.max_collisions
+    events = DEFAULT_MAX_EVENTS if opts.max_events is ... else opts.max_events
+    # Collisions stop at whichever limit comes first; passages and mode changes check max_events.
+    return t_end, limit, events, limit if events is None else events if limit is None else min(limit, events)
 
 
 def _status(log, outcome, t_end) -> tuple[Status, str]:
