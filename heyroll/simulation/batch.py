@@ -216,7 +216,7 @@ def _load(scene, number, index, ta, slots, options):
     if not settled or log.records or log.stop.reason \
             or _overlap(scene, precision, system.expand(holder[0].tolist()), "at the start of a mode"):
         return None
-    slots[index] = [lambda d_sgn, h=h: h(element, d_sgn) for h in handlers]
+    slots[index] = [(h, element) for h in handlers]
     return _Point(number=number, scene=scene, system=system, log=log, holder=holder, handlers=handlers,
                   started=time.perf_counter(), initial_state=np.array(start.initial_state))
 
@@ -247,13 +247,18 @@ def _result(point: _Point, ta, index: int, outcome, t_end: float, options) -> Si
 
 def _batch_integrator(system, width: int, cooldown: float):
     """(taylor_adaptive_batch, slots) for ``system``'s shape: gap events whose callbacks call
-    ``slots[element][n](d_sgn)`` (each element's own run's handlers)."""
+    ``handler(element, d_sgn)`` for ``slots[element][n] = (handler, element)`` (each element's own
+    run's handlers and its view of the integrator's time)."""
 
     def build():
         slots: list = [[] for _ in range(width)]
 
         def forward(n):
-            return lambda ta, d_sgn, index: slots[index][n](int(d_sgn))
+            def call(ta, d_sgn, index):
+                handler, element = slots[index][n]
+                return handler(element, d_sgn)
+
+            return call
 
         events = [hy.t_event_batch(gap, callback=forward(n), direction=hy.event_direction.any, cooldown=cooldown)
                   for n, gap in enumerate(system.gap_expressions)]
