@@ -14,7 +14,7 @@ import pytest
 
 import heyroll
 from heyroll.interfaces.cli import main
-from heyroll.interfaces.scene_file import default_scene, load_scene
+from heyroll.interfaces.scene_file import default_scene, default_scene_text, load_scene
 from heyroll.simulation.batch import batch_reason, simulate_batch
 from heyroll.sweep import SweepError, SweepStoreError, run_sweep
 
@@ -63,12 +63,28 @@ def test_elements_take_the_next_scene_when_one_stops():
         _agree(heyroll.simulate(scene, options), result)
 
 
+def test_a_body_over_the_top_warns_as_in_its_scalar_run():
+    """Fast enough to reach the upper half of the circle: the track's normal force changes sign there
+    (a warning on a two-sided track), found by the batch's non-terminal events at the scalar run's time."""
+    base = default_scene()
+    over_the_top = base.with_state(dq=(base.dq[0], 5.0))
+    options = heyroll.RunOptions(t_end=1e4, max_collisions=8)  # (chaotic: later collisions drift apart)
+    batch, = simulate_batch([over_the_top], options)
+    scalar = heyroll.simulate(over_the_top, options)
+    assert batch.settings["batch"].startswith("batch of")
+    _agree(scalar, batch)
+    assert scalar.settings["warnings"] and len(batch.settings["warnings"]) == len(scalar.settings["warnings"])
+    for a, b in zip(scalar.settings["warnings"], batch.settings["warnings"]):
+        ta, tb = (float(w.split(" at t = ")[1].split(" s,")[0]) for w in (a, b))
+        assert abs(ta - tb) <= 1e-13 * ta
+
+
 def test_scenes_the_batch_cannot_run_are_their_scalar_runs_to_the_last_bit():
     base = default_scene()
-    over_the_top = base.with_state(dq=(base.dq[0], 25.0))  # reaches the upper half: track events
+    one_sided = heyroll.parse_scene(default_scene_text().replace('type = "circle"', 'type = "circle"\nsides = "one"'))
     touching = base.with_state(q=(0, base.pairs[0].beta), dq=(0, 0))  # starts in contact, at rest
-    results = simulate_batch([over_the_top, touching], OPTIONS)
-    for scene, result in zip((over_the_top, touching), results):
+    results = simulate_batch([one_sided.with_state(dq=(base.dq[0], 5.0)), touching], OPTIONS)
+    for scene, result in zip((one_sided.with_state(dq=(base.dq[0], 5.0)), touching), results):
         assert result.settings["batch"].startswith("scalar:")
         scalar = heyroll.simulate(scene, OPTIONS)
         assert np.array_equal(result.collision_table()["t"], scalar.collision_table()["t"])

@@ -8,8 +8,8 @@ of a scalar run (events.mode_handlers), one set per batch element, and a
 scene that stops (max_collisions, t_end) leaves its element to the next one.
 
 What runs here: double precision, a circle in a fixed plane, no friction and
-no forcing, every body free for the whole run, only gap events (the engine's
-circle hot path). A scene this path cannot run as a scalar run would (it
+no forcing, every body free for the whole run, gap events and the two-sided
+track's warnings (the engine's circle hot path). A scene this path cannot run as a scalar run would (it
 starts in contact, it would enter persistent contact, a collision was
 missed, the integrator failed, options it does not take) runs through
 :func:`heyroll.simulation.driver.simulate` instead, from its start: the
@@ -61,10 +61,10 @@ def batch_reason(scene, options: RunOptions) -> str:
     if start.limit or any(u.is_cluster for u in start.units):
         return "the scene starts in contact or where the track cannot hold it"
     system = start.system
-    if (system.guard_expressions or system.track_events or system.links or system.bound_events
-            or system.release_events or system.strobe_expression is not None or system.friction_blocks
-            or not system.gap_reopening):
-        return "its events are not the gap events alone (track forces, limiters, guards)"
+    if (system.guard_expressions or any(ev.terminal for ev in system.track_events) or system.links
+            or system.bound_events or system.release_events or system.strobe_expression is not None
+            or system.friction_blocks or not system.gap_reopening):
+        return "its events are not the gap events and track warnings alone (one-sided track, limiters, guards)"
     return ""
 
 
@@ -89,10 +89,10 @@ class _Element:
     heyoka's batch time arrays are live views of its buffers: read once, indexed at every event
     (ta.dtime builds the two views anew: 1.3 us, measured, a collision's third)."""
 
-    __slots__ = ("hi", "lo", "index")
+    __slots__ = ("ta", "hi", "lo", "index")
 
     def __init__(self, ta, index: int):
-        (self.hi, self.lo), self.index = ta.dtime, index
+        self.ta, (self.hi, self.lo), self.index = ta, ta.dtime, index
 
     @property
     def dtime(self) -> tuple:
@@ -101,6 +101,12 @@ class _Element:
     @property
     def time(self) -> float:
         return float(self.hi[self.index])
+
+    def update_d_output(self, t):
+        """The element's state at time t of its last step (the others' at their own time)."""
+        times = np.array(self.ta.time)
+        times[self.index] = t
+        return self.ta.update_d_output(times)[:, self.index]
 
 
 def simulate_batch(scenes, options: RunOptions | None = None, *, width: int | None = None) -> list[SimulationResult]:
@@ -201,7 +207,7 @@ def _load(scene, number, index, ta, slots, options):
     log = CollisionLog(max_collisions=collision_limit, max_events=events, record_modes=None)
     holder: list = [None, None, None]
     element = _Element(ta, index)
-    handlers, _warnings, settle = mode_handlers(scene, system, log, holder, motion_time_scale(scene), list(start.pieces))
+    handlers, warnings, settle = mode_handlers(scene, system, log, holder, motion_time_scale(scene), list(start.pieces))
     params = list(system.parameters)
     ta.pars[:, index] = params[: ta.pars.shape[0]]
     state = system.initial_state_of(scene)
@@ -216,7 +222,8 @@ def _load(scene, number, index, ta, slots, options):
     if not settled or log.records or log.stop.reason \
             or _overlap(scene, precision, system.expand(holder[0].tolist()), "at the start of a mode"):
         return None
-    slots[index] = [(h, element) for h in handlers]
+    slots[0][index] = [(h, element) for h in handlers]
+    slots[1][index] = [(h, element) for h in warnings]
     return _Point(number=number, scene=scene, system=system, log=log, holder=holder, handlers=handlers,
                   started=time.perf_counter(), initial_state=np.array(start.initial_state))
 
@@ -246,23 +253,37 @@ def _result(point: _Point, ta, index: int, outcome, t_end: float, options) -> Si
 
 
 def _batch_integrator(system, width: int, cooldown: float):
-    """(taylor_adaptive_batch, slots) for ``system``'s shape: gap events whose callbacks call
-    ``handler(element, d_sgn)`` for ``slots[element][n] = (handler, element)`` (each element's own
-    run's handlers and its view of the integrator's time)."""
+    """(taylor_adaptive_batch, (terminal, warnings)) for ``system``'s shape: gap events whose callbacks
+    call ``handler(element, d_sgn)`` for ``terminal[index][n] = (handler, element)``, and track warnings
+    ``handler(element, t, d_sgn)`` from ``warnings[index][n]`` (each element's own run's handlers and
+    its view of the integrator)."""
 
     def build():
-        slots: list = [[] for _ in range(width)]
+        terminal: list = [[] for _ in range(width)]
+        warnings: list = [[] for _ in range(width)]
 
         def forward(n):
             def call(ta, d_sgn, index):
-                handler, element = slots[index][n]
+                handler, element = terminal[index][n]
                 return handler(element, d_sgn)
 
             return call
 
+        def forward_nt(n):
+            def call(ta, t, d_sgn, index):
+                handler, element = warnings[index][n]
+                handler(element, t, d_sgn)
+
+            return call
+
+        # As events.mode_events: the gaps both ways (SceneSystem.gap_reopening), the track's normal force
+        # changing sign as a warning (a two-sided track).
         events = [hy.t_event_batch(gap, callback=forward(n), direction=hy.event_direction.any, cooldown=cooldown)
                   for n, gap in enumerate(system.gap_expressions)]
-        ta = hy.taylor_adaptive_batch(system.equations, np.zeros((len(system.equations), width)), t_events=events)
-        return ta, slots
+        nt_events = [hy.nt_event_batch(x, callback=forward_nt(n), direction=hy.event_direction.negative)
+                     for n, x in enumerate(system.track_expressions)]
+        ta = hy.taylor_adaptive_batch(system.equations, np.zeros((len(system.equations), width)), t_events=events,
+                                      nt_events=nt_events)
+        return ta, (terminal, warnings)
 
     return _BATCHES.get((system.shape, width, repr(cooldown)), build)
