@@ -109,7 +109,7 @@ def ball_paths(result):
     balls move at constant velocity between events; the accelerations are checked to be zero)."""
     n = result.scene.n_bodies
     out = [[] for _ in range(n)]
-    for _t, state, _acc in result.paths:
+    for _t, state, _acc, _riding in result.paths:
         for k in range(n):
             out[k].append((state[6 * k], state[6 * k + 1]))
     final = [float(v) for v in result.state_final]
@@ -119,7 +119,7 @@ def ball_paths(result):
 
 
 def zero_accelerations(result) -> bool:
-    return all(a == 0.0 for _t, _s, acc in result.paths for a in acc)
+    return all(a == 0.0 for _t, _s, acc, _r in result.paths for a in acc)
 
 
 # -- independent geometry (mpmath) -------------------------------------------------------------
@@ -676,7 +676,7 @@ def main(out_dir=None, quick=False) -> dict:
     print("\nFig. 23: points of great circles of the rolling ball of Fig. 22, at impact "
           f"{e['plan_impact']} (state from the run)")
     r = float(e["R"])
-    state = next(s for t0, s, _a in res.paths if t0 > 0)  # just after the first impact: a rolling state
+    state = next(s for t0, s, _a, _r in res.paths if t0 > 0)  # just after the first impact: a rolling state
     v = np.array(state[2:4])
     u = np.array(state[4:6])
     w_cross_z = (v - u) / r  # omega x z from the slip u = v - R omega x z

@@ -96,13 +96,17 @@ def check(text, conserving, size):
     tol = 1e-9 * size
     ends = [p[0] for p in result.paths[1:]] + [float(result.t_final)]
     boundary = scene.boundary
-    for m, ((t0, state, acc), t1) in enumerate(zip(result.paths, ends)):
+    for m, ((t0, state, acc, riding), t1) in enumerate(zip(result.paths, ends)):
         s = np.array(state).reshape(n, 6)
         for tau in (0.0, (t1 - t0) / 2, t1 - t0):
             a = np.array(acc).reshape(n, 2)
             xy = s[:, :2] + s[:, 2:4] * tau + a * tau**2 / 2
             for i in range(n):
+                if tau > 0 and i in riding:  # along the cushion's curve, not a polynomial: checked at the ends
+                    continue
                 for j in range(i + 1, n):
+                    if tau > 0 and j in riding:
+                        continue
                     assert np.hypot(*(xy[i] - xy[j])) >= radii[i] + radii[j] - tol
                 if boundary.kind == "circle":
                     assert np.hypot(*xy[i]) <= float(boundary.radius) - radii[i] + tol

@@ -34,20 +34,42 @@ def table_figures(result, out_dir: Path) -> dict:
 
 
 def path_points(result, max_pieces: int = DRAWN_PIECES) -> list:
-    """Per ball, a list of (x, y, sliding) polylines: one per piece of motion between events."""
+    """Per ball, a list of (x, y, sliding) polylines: one per piece of motion between events.
+
+    A piece is (t, state, accelerations, riding balls): straight or parabolic, or, for a ball riding
+    the cushion, along the curve of its centre at its constant speed."""
     scene = result.scene
     n = scene.n_bodies
     pieces = result.paths[:max_pieces]
     ends = [p[0] for p in pieces[1:]] + [float(result.t_final)]
     out = [[] for _ in range(n)]
-    for (t0, state, acc), t1 in zip(pieces, ends):
+    for (t0, state, acc, riding), t1 in zip(pieces, ends):
         for k in range(n):
             x, y, vx, vy = state[6 * k:6 * k + 4]
+            if k in riding:
+                out[k].append((*along_cushion(scene, k, x, y, vx, vy, max(t1 - t0, 0)), False))
+                continue
             ax, ay = acc[2 * k], acc[2 * k + 1]
             sliding = ax != 0 or ay != 0
             tau = np.linspace(0, max(t1 - t0, 0), 40 if sliding else 2)
             out[k].append((x + vx * tau + ax * tau**2 / 2, y + vy * tau + ay * tau**2 / 2, sliding))
     return out
+
+
+def along_cushion(scene, k: int, x: float, y: float, vx: float, vy: float, duration: float, samples: int = 2048):
+    """(x, y) of ball k riding the cushion from (x, y) at velocity (vx, vy) for ``duration`` s: the stretch of
+    the curve of its centre (the boundary's centre_curve, sampled) it covers, the whole curve after a lap."""
+    theta = np.linspace(0, 2 * np.pi, samples, endpoint=False)
+    cx, cy, dx, dy = scene.boundary.centre_curve(float(scene.balls[k].body.radius), theta)
+    ds = np.hypot(dx, dy) * (2 * np.pi / samples)
+    start = int(np.argmin((cx - x) ** 2 + (cy - y) ** 2))
+    forward = dx[start] * vx + dy[start] * vy >= 0
+    order = np.roll(np.arange(samples), -start)
+    if not forward:
+        order = np.roll(order[::-1], 1)
+    covered = np.cumsum(ds[order]) - ds[order[0]]
+    keep = order[covered <= np.hypot(vx, vy) * duration]
+    return np.concatenate([[x], cx[keep]]), np.concatenate([[y], cy[keep]])
 
 
 def caustic(result):

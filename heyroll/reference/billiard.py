@@ -211,3 +211,48 @@ def _ellipse_distance(a, b, px, py):
             break
     fx, fy = a * mpmath.cos(th), b * mpmath.sin(th)
     return mpmath.sqrt((fx - px) ** 2 + (fy - py) ** 2), (fx, fy)
+
+
+def reference_ride(a, b, radius, x0, y0, vx, vy, duration, dps: int = 40) -> tuple:
+    """(x, y) of a ball of radius R riding an elliptical cushion (a = b: a circle) for ``duration`` s.
+
+    The engine's ride (heyroll.simulation.table.system): the centre moves along the inner parallel curve
+    C(th) = P(th) - R n(th) at the constant speed |v|, in the direction of v. Here by arc length:
+    |C'(th)| = |P'(th)| (1 - R kappa(th)) = |P'| - R a b / |P'|^2 (kappa = a b / |P'|^3 the ellipse's
+    curvature), s(th) by Gauss-Legendre quadrature, the foot angle th0 of the start by Newton's method on
+    (c0 - C(th)) . C'(th) = 0, the end th1 by Newton's method on s(th1) - s(th0) = +-|v| duration.
+    """
+    with mpmath.workdps(dps):
+        a, b, r = mpmath.mpf(a), mpmath.mpf(b), mpmath.mpf(radius)
+        x0, y0, vx, vy = (mpmath.mpf(v) for v in (x0, y0, vx, vy))
+
+        def speed(th):  # |P'(th)|
+            return mpmath.sqrt((a * mpmath.sin(th)) ** 2 + (b * mpmath.cos(th)) ** 2)
+
+        def curve(th):
+            m = speed(th)
+            return (a * mpmath.cos(th) - r * b * mpmath.cos(th) / m, b * mpmath.sin(th) - r * a * mpmath.sin(th) / m)
+
+        def tangent(th):
+            return mpmath.diff(lambda t: curve(t)[0], th), mpmath.diff(lambda t: curve(t)[1], th)
+
+        def foot(th):
+            cx, cy = curve(th)
+            tx, ty = tangent(th)
+            return (x0 - cx) * tx + (y0 - cy) * ty
+
+        th0 = mpmath.findroot(foot, mpmath.atan2(y0 / b, x0 / a))
+        tx, ty = tangent(th0)
+        sign = 1 if tx * vx + ty * vy >= 0 else -1
+        target = mpmath.sqrt(vx * vx + vy * vy) * mpmath.mpf(duration)
+
+        def element(th):
+            m = speed(th)
+            return m - r * a * b / m**2
+
+        perimeter = mpmath.quad(element, [0, mpmath.pi / 2, mpmath.pi, 3 * mpmath.pi / 2, 2 * mpmath.pi])
+        laps = mpmath.floor(target / perimeter)
+        rest = target - laps * perimeter
+        guess = th0 + sign * 2 * mpmath.pi * rest / perimeter
+        th1 = mpmath.findroot(lambda th: sign * mpmath.quad(element, [th0, th]) - rest, guess)
+        return curve(th1)

@@ -18,9 +18,9 @@ from ...model.table.boundaries import sqrt
 from ..driver import DEFAULT_MAX_EVENTS, RunOptions
 from ..result import Status
 from .contacts import Contact, ContactGeometry
-from .resolve import SIMULTANEOUS, Resolver
+from .resolve import SETTLED, SIMULTANEOUS, Resolver
 from .result import TableResult
-from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, SLIDING, STATE_PER_BALL, integrator,
+from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, RIDING, SLIDING, STATE_PER_BALL, integrator,
                      table_system)
 
 #: Steps per call of propagate_until (a call that does not advance the time means heyoka is stuck).
@@ -31,6 +31,8 @@ MAX_AT_ONE_INSTANT = 10_000
 LEAVE_DOUBLINGS = 20
 #: Pieces of motion kept for figures.
 MAX_PATH_PIECES = 200_000
+#: Newton steps at most putting a settling ball's centre onto the curve of its cushion.
+PROJECTION_STEPS = 8
 
 
 def simulate_table(scene: TableScene, opts: RunOptions, sink=None, progress=None) -> TableResult:
@@ -90,6 +92,9 @@ class _Run:
         self.kept: list | None = None  # with a sink: the first chunk, kept for the result
         self.flushed = 0
         self.paths: list = []
+        #: balls riding the cushion (system module docstring): their wall event is off, the cushion's
+        #: normal force keeps them on its curve
+        self.riding = [False] * scene.n_bodies
         self.status, self.message = None, ""
         self.fired = None
         self.resolved: list = []
@@ -158,7 +163,8 @@ class _Run:
         self.ta.state[:] = self.state
         self.ta.pars[:] = self.pars
         if len(self.paths) < MAX_PATH_PIECES:
-            self.paths.append((float(self.t), [float(v) for v in self.state], self._accelerations()))
+            self.paths.append((float(self.t), [float(v) for v in self.state], self._accelerations(),
+                               tuple(k for k, on in enumerate(self.riding) if on)))
 
     def _accelerations(self) -> list:
         out = []
@@ -191,10 +197,12 @@ class _Run:
             norm = sqrt(ux * ux + uy * uy)
             dx, dy = ux / norm, uy / norm
             self.pars[b:b + BALL_PARS] = [-self.slide_v[k] * dx, -self.slide_v[k] * dy, -self.slide_u[k] * dx,
-                                          -self.slide_u[k] * dy, zero + 1, dx, dy]
+                                          -self.slide_u[k] * dy, zero + 1, dx, dy, zero]
             self.slip_scale[k] = norm
         else:
             self.pars[b:b + BALL_PARS] = [zero] * BALL_PARS
+        if self.riding[k]:
+            self.pars[b + RIDING] = zero + 1
 
     def reroll(self, k: int) -> None:
         """Ball k's slip reached zero: it rolls from now on; so does every ball whose slip ends now too
@@ -294,7 +302,7 @@ class _Run:
             touching = geometry.contacts(self.state, geometry.touch)
             if fired is not None and not any(_same(fired, c) for c in touching):
                 touching.append(fired)
-            approaching = [c for c in touching if geometry.approach(c, self.state) > self.zero]
+            approaching = [c for c in touching if self.closing(c)]
             if len(touching) == 1 and approaching:  # one impact alone: the scene's law itself
                 self.resolve(approaching[0] if fired is None or not _same(fired, approaching[0]) else fired)
             elif approaching:
@@ -306,7 +314,7 @@ class _Run:
                 if self.status is not None:
                     return
                 near = geometry.contacts(self.state, geometry.touch)
-                waiting = [c for c in near if geometry.approach(c, self.state) > self.zero]
+                waiting = [c for c in near if self.closing(c)]
                 if not waiting:
                     break
                 self.resolve(waiting[0])
@@ -335,6 +343,18 @@ class _Run:
             if self.fired is None or not _same(c, self.fired):
                 self.leave(c)
 
+    def closing(self, contact: Contact) -> bool:
+        """The contact approaches: an impact to resolve. A riding ball's cushion only when something drives the
+        ball into it faster than the grazing limit (its normal speed is otherwise round-off)."""
+        speed = self.geometry.approach(contact, self.state)
+        if not speed > self.zero:
+            return False
+        if contact.kind == "wall" and self.riding[contact.i]:
+            s = STATE_PER_BALL * contact.i
+            vx, vy = self.state[s + 2], self.state[s + 3]
+            return speed * speed >= self.grazing * (vx * vx + vy * vy)
+        return True
+
     def resolve(self, contact: Contact) -> None:
         before = list(self.state)
         energy_before = self.energy(before)
@@ -361,6 +381,8 @@ class _Run:
         s = STATE_PER_BALL * contact.i
         nx, ny = contact.normal
         step = self.nudge
+        if contact.kind == "wall" and self.riding[contact.i]:
+            return  # it stays on the cushion's curve; its event is off
         if contact.kind == "wall":
             _, c = self.system.walls[(contact.i, contact.j)]
             gap = self.scene.boundary.gap
@@ -385,14 +407,17 @@ class _Run:
             step = step * 2
 
     def check_cushion_contact(self, contact: Contact) -> None:
-        """Stop where a ball stays on a cushion: a contact mode that is not modelled.
+        """A ball that stays on a cushion: it settles onto a curved one and rides it, or the run stops.
 
         * Grazing a curved cushion: after an impact at normal speed v_n along a cushion of radius of
           curvature rho the ball's chord dips into the table by about v_n^2 rho / (2 v^2) before the
           next impact; below the contact resolution the impacts can no longer be told apart. With
           k < 1 they accumulate (v_n shrinks by k each time, in a finite time): the ball settles onto
-          the cushion and would roll along it pressed against it. A ball started touching a curved
-          cushion and moving along it is the same case.
+          the cushion and rolls along it pressed against it (:meth:`ride`). A ball started touching a
+          curved cushion and moving along it is the same case. Where riding is not compiled (k = 1,
+          the slide cushion model) or the ball slides on the cloth, the run stops: not modelled.
+        * A riding ball sent off the cushion faster than the grazing limit leaves it; otherwise it
+          stays on, its round-off normal speed removed.
         * Pressed against a straight cushion: no normal speed left (k = 0) while sliding friction drives
           the ball into the cushion.
         """
@@ -402,17 +427,66 @@ class _Run:
         nx, ny = contact.normal
         vn = -(vx * nx + vy * ny)  # into the table
         speed2 = vx * vx + vy * vy
-        if self.grazing is not None and speed2 > self.zero and vn * vn < self.grazing * speed2:
+        grazing = self.grazing is not None and vn * vn < self.grazing * speed2
+        if self.riding[k]:
+            if vn > self.zero and not grazing:
+                self.riding[k] = False  # sent off into the table: its wall event is on again
+                self.set_mode(k)
+            elif self.pars[b + SLIDING] != self.zero:
+                self.stop(Status.FAILED, f"ball {k + 1} slides on the cloth along the curved cushion at "
+                                         f"t = {float(self.t):.17g} s: sliding along a cushion is not modelled")
+            else:
+                self.ride(k, record=False)
+            return
+        if grazing and speed2 > self.zero:
+            if self.system.ride and self.pars[b + SLIDING] == self.zero:
+                self.ride(k, record=True)
+                return
+            why = ("the ball slides on the cloth, and sliding along a cushion is not modelled"
+                   if self.system.ride else "impacts accumulate: the ball settles onto the cushion; riding it is "
+                   "modelled only for the rolling cushion model with k < 1")
             self.stop(Status.FAILED, f"ball {k + 1} moves along the curved cushion at t = {float(self.t):.17g} s with a "
                                      f"normal speed {float(vn / sqrt(speed2)):.3g} of its speed, too slow to resolve its "
-                                     "next impact (impacts accumulate: the ball settles onto the cushion, and rolling "
-                                     "along a cushion is not modelled)")
+                                     f"next impact ({why})")
             return
         push = self.pars[b + FVX] * nx + self.pars[b + FVY] * ny
         if push > self.zero and not vn * vn > self.grazing_straight * speed2:
             self.stop(Status.FAILED, f"ball {k + 1} is pressed against the cushion at t = {float(self.t):.17g} s (no "
                                      "normal speed left, sliding friction driving it into the cushion): sliding along "
                                      "a cushion is not modelled")
+
+    def ride(self, k: int, record: bool) -> None:
+        """Ball k settles onto its (curved) cushion and rides it from now on (system module docstring).
+
+        The limit of the accumulating impacts (k < 1): the centre put onto the cushion's curve g = 0
+        (Newton's method along grad g), the normal part of its velocity removed, the tangential part
+        kept, rolling kept (the slip stays 0). With ``record`` it is one row of the impact table,
+        law_flag SETTLED, whose energy change is what the rest of the accumulation would dissipate.
+        """
+        s = STATE_PER_BALL * k
+        before = list(self.state)
+        energy_before = self.energy(before)
+        _, c = self.system.walls[(k, 0)]
+        boundary = self.scene.boundary
+        x, y = self.state[s], self.state[s + 1]
+        for _ in range(PROJECTION_STEPS):
+            g = boundary.gap(0, x, y, c)
+            gx, gy = boundary.gradient(0, x, y, c)
+            step = g / (gx * gx + gy * gy)
+            x, y = x - step * gx, y - step * gy
+            if abs(step) * sqrt(gx * gx + gy * gy) <= self.nudge:
+                break
+        gx, gy = boundary.gradient(0, x, y, c)
+        norm = sqrt(gx * gx + gy * gy)
+        nx, ny = gx / norm, gy / norm
+        vx, vy = self.state[s + 2], self.state[s + 3]
+        vn = vx * nx + vy * ny
+        self.state[s:s + 4] = [x, y, vx - vn * nx, vy - vn * ny]
+        self.riding[k] = True
+        self.set_mode(k)
+        if record:
+            self.record(Contact("wall", k, 0, (nx, ny), self.zero), before, self.state, energy_before,
+                        self.energy(self.state), SETTLED)
 
     def simultaneous(self, contacts: list) -> None:
         before = list(self.state)

@@ -29,8 +29,9 @@ from .system import STATE_PER_BALL
 
 #: law_flag: 0 the scene's law, 1 Newton's law where the scene's would leave the balls approaching
 #: (Hedrih's law on unequal radii), 2 a simultaneous-impulse resolution, 3 a rolling law met a sliding ball:
-#: the impulse went through the centres (Newton's law with the masses), the spins were kept.
-SCENE_LAW, FALLBACK_LAW, SIMULTANEOUS, SLIDING_BALL = 0, 1, 2, 3
+#: the impulse went through the centres (Newton's law with the masses), the spins were kept, 4 the ball settled
+#: onto a curved cushion (k < 1: the limit of its accumulating impacts, normal speed removed) and rides it.
+SCENE_LAW, FALLBACK_LAW, SIMULTANEOUS, SLIDING_BALL, SETTLED = 0, 1, 2, 3, 4
 #: Contacts whose active set 'impulses' searches over all subsets (2^m of them); more go to projected
 #: Gauss-Seidel (a rack of 15 balls touching: 30 contacts).
 MAX_SIMULTANEOUS = 8
