@@ -90,3 +90,11 @@ def test_billiards_study_tiny(tmp_path):
             assert float(lam) > 1e-3 and float(lam_r) > 1e-3, radius
     spreads = [float(r[3]) for r in finite]
     assert spreads == sorted(spreads)  # lost the more the larger the ball
+
+    # 5. riding the cushion: every case settles, rides, and ends on its curve where the reference puts it
+    riding = table_rows(section(out, "## 5."))
+    assert [r[0] for r in riding] == ["ball R = 0.1, circle", "particle, ellipse", "ball R = 0.1, ellipse",
+                                      "ball R = 0.01, ellipse"]
+    for label, impacts, _t, loss, _laps, error, speed, distance, _wall, status in riding:
+        assert status == "completed" and int(impacts) > 5 and float(loss) < 1e-10, label
+        assert float(error) < 1e-9 and abs(float(speed)) < 1e-11 and abs(float(distance)) < 1e-13, label

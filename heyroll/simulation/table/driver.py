@@ -20,8 +20,8 @@ from ..result import Status
 from .contacts import Contact, ContactGeometry
 from .resolve import SETTLED, SIMULTANEOUS, Resolver
 from .result import TableResult
-from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, RIDING, SLIDING, STATE_PER_BALL, integrator,
-                     table_system)
+from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, RIDE_HOLD, RIDE_SPEED2, RIDING, SLIDING,
+                     STATE_PER_BALL, integrator, table_system)
 
 #: Steps per call of propagate_until (a call that does not advance the time means heyoka is stuck).
 STEP_CHUNK = 100_000
@@ -196,13 +196,17 @@ class _Run:
         if self.system.rolls[k] and (ux != zero or uy != zero):
             norm = sqrt(ux * ux + uy * uy)
             dx, dy = ux / norm, uy / norm
-            self.pars[b:b + BALL_PARS] = [-self.slide_v[k] * dx, -self.slide_v[k] * dy, -self.slide_u[k] * dx,
-                                          -self.slide_u[k] * dy, zero + 1, dx, dy, zero]
+            self.pars[b:b + RIDING] = [-self.slide_v[k] * dx, -self.slide_v[k] * dy, -self.slide_u[k] * dx,
+                                       -self.slide_u[k] * dy, zero + 1, dx, dy]
             self.slip_scale[k] = norm
         else:
-            self.pars[b:b + BALL_PARS] = [zero] * BALL_PARS
-        if self.riding[k]:
-            self.pars[b + RIDING] = zero + 1
+            self.pars[b:b + RIDING] = [zero] * RIDING
+        self.pars[b + RIDING:b + BALL_PARS] = [zero] * (BALL_PARS - RIDING)
+        if self.riding[k]:  # the speed it rides at, held (system module docstring)
+            vx, vy = self.state[s + 2], self.state[s + 3]
+            speed2 = vx * vx + vy * vy
+            hold = self.pars[self.system.alpha] / (2 * speed2) if speed2 > zero else zero
+            self.pars[b + RIDING:b + BALL_PARS] = [zero + 1, speed2, hold]
 
     def reroll(self, k: int) -> None:
         """Ball k's slip reached zero: it rolls from now on; so does every ball whose slip ends now too
