@@ -139,3 +139,41 @@ def test_the_figure_draws_a_ride_along_the_curve():
     result = simulate(scene)
     (x, y, _sliding), = path_points(result)[0]
     assert np.allclose(np.hypot(x, y), 0.9, atol=1e-12) and len(x) > 100
+
+
+def test_review_cases_of_riding():
+    """Found by an adversarial review of the first version (each was: energy growing, an overlap, 10,000
+    impacts at one instant, an overlap under 'impulses')."""
+    # a ball with a slip (no friction to end it) does not ride: its spin would not follow the cushion
+    spin = dict(ball("0.9", "0", "0", "1"), wx=0, wy=0)
+    slip = simulate(table_scene(CIRCLE, [spin], cushion_k="0.5", friction="0", t_end=3))
+    assert slip.status is Status.FAILED and "slides on the cloth" in slip.message
+    assert slip.energy_final == pytest.approx(slip.energy_initial, rel=1e-14)
+    # a riding ball turned by its cushion into a ball touching it: pressed together, not modelled (was: overlap)
+    pressed = simulate(table_scene(CIRCLE, [ball("0.9", "0", "0", "1", mass="1"), ball("0.69", "0", "0", "1", mass="1")],
+                                   cushion_k="0.3", t_end=3))
+    assert pressed.status is Status.FAILED and "pressed together" in pressed.message
+    # k = 0: the normal speed left by the impact is round-off (+4.6e-17 into the cushion): it settles
+    k0 = simulate(table_scene(CIRCLE, [ball("0.4296553195975211", "0.4420438294276994", "-0.31123637389397607",
+                                            "-0.29041358988417554", radius="0.05")], cushion_k="0", t_end=5))
+    assert k0.status is Status.COMPLETED, k0.message
+    assert list(k0.collision_table()["law_flag"]) == [0, SETTLED]
+    # under 'impulses' a riding ball's cushion is not a simultaneous contact unless the ball is driven into it
+    for policy in ("impulses", "sequential"):
+        pair = [ball("0.9", "0", "0", "1", mass="1"), ball("0", "0.9", "-0.5", "0", mass="0.3", radius="0.05")]
+        result = simulate(table_scene(CIRCLE, pair, cushion_k="0.5", simultaneous=policy, t_end=10))
+        assert result.status is Status.COMPLETED, (policy, result.message)
+        table = result.collision_table()
+        lost = np.sum(table["energy_before"] - table["energy_after"])
+        assert result.energy_initial - result.energy_final == pytest.approx(lost, rel=1e-12)
+
+
+def test_the_rows_of_one_simultaneous_resolution_add_up_to_its_energy_change():
+    balls = [ball("-0.6", "0.0", "1.0", "0.0", mass="1"), ball("0.0", "0.0", "0", "0", mass="1"),
+             ball("0.2", "0.0", "0", "0", mass="1"), ball("0.4", "0.0", "0", "0", mass="1")]
+    result = simulate(table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 1.0', balls, law="newton", k="0.8",
+                                  simultaneous="impulses", t_end=0.9))
+    table = result.collision_table()
+    assert np.count_nonzero(table["law_flag"] == 2) >= 2
+    lost = np.sum(table["energy_before"] - table["energy_after"])
+    assert result.energy_initial - result.energy_final == pytest.approx(lost, rel=1e-12)
