@@ -229,3 +229,8 @@ def test_fast_and_tolerance_are_run_settings_recorded_in_the_summary(tmp_path):
     # The price: the elastic scene's energy error grows, still small over 20 s.
     error = abs(summary["energy_final"] - summary["energy_initial"]) / summary["energy_initial"]
     assert error < 1e-9
+
+
+def test_python_dash_m_heyroll_is_the_command_line():
+    done = subprocess.run([sys.executable, "-m", "heyroll", "--version"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and heyroll.__version__ in done.stdout + done.stderr
