@@ -489,9 +489,14 @@ class _Run:
         event is on again). Faster into the cushion it is an impact (``closing``). A sliding ball is left
         to check_cushion_contact (not modelled). True: a ball's velocity or riding changed."""
         changed = False
-        for c in near:
-            if c.kind != "wall":
-                continue
+        walls = [c for c in near if c.kind == "wall"]
+        held = {c.i for c in walls}
+        for k, on in enumerate(self.riding):  # a riding ball is judged wherever round-off has put it
+            if on and k not in held:
+                s = STATE_PER_BALL * k
+                distance, normal = self.geometry.wall(k, 0, self.state[s], self.state[s + 1])
+                walls.append(Contact("wall", k, 0, normal, distance))
+        for c in walls:
             k = c.i
             s = STATE_PER_BALL * k
             vx, vy = self.state[s + 2], self.state[s + 3]
