@@ -507,6 +507,8 @@ class _Run:
                 if grazing and speed2 > self.zero and not self.slides(k):
                     self.ride(k, record=True)
                     changed = True
+            elif self.slides(k):
+                continue  # an impact made it slide: check_cushion_contact stops the run (not modelled)
             elif grazing:
                 if into != self.zero:  # more than round-off: an impact at this instant gave it that speed
                     moved = abs(into) > self.round_off * sqrt(speed2) and any(
