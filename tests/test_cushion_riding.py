@@ -124,10 +124,32 @@ def test_what_riding_does_not_cover_stops_the_run_and_says_why():
     # k = 1 compiles no riding: a ball started along a curved cushion cannot be followed
     along = simulate(table_scene(ELLIPSE, [ball("0", "0.9", "1", "0")], t_end=5))
     assert along.status is Status.FAILED and "riding it is modelled only" in along.message
-    # the slide cushion model: the ball slides while it grazes
+    # the slide cushion model: this ball still slides (friction has not made it roll again) as it grazes
     slide = simulate(table_scene(CIRCLE, [ball("0.2", "0.1", "0.6", "0.9")], cushion="slide", cushion_k="0.5",
                                  t_end=100))
-    assert slide.status is Status.FAILED and "riding it is modelled only for the rolling" in slide.message
+    assert slide.status is Status.FAILED and "the ball slides on the cloth" in slide.message
+
+
+def test_under_the_slide_cushion_model_a_rolling_ball_rides_while_the_cloth_keeps_it_rolling():
+    """A physical cushion pushes through the centre: the cloth's friction must turn the spin with the ball,
+    (kappa - 1)/kappa v^2/rho <= mu g on the tightest bend; a ball that re-rolled before it grazes rides."""
+    launch = ball("0.44", "-0.11", "-0.5", "-0.8", radius="0.05")
+    result = simulate(table_scene(ELLIPSE, [launch], cushion="slide", cushion_k="0.8", t_end=60))
+    assert result.status is Status.COMPLETED, result.message
+    table = result.collision_table()
+    assert table["law_flag"][-1] == SETTLED
+    t0, x0, y0, vx, vy = settle_state(result)
+    x, y, vxf, vyf = result.state_final[:4]
+    assert math.hypot(vxf, vyf) == pytest.approx(math.hypot(vx, vy), rel=1e-12)
+    rx, ry = reference_ride(2, 1, mpmath.mpf("0.05"), x0, y0, vx, vy, 60 - t0)
+    assert math.hypot(x - float(rx), y - float(ry)) < 1e-10
+    # started on the curve at (0, 0.95) along it at 1 m/s: 2/7 v^2/rho = 0.635 m/s^2 is needed on the ends of the
+    # major axis (rho = b^2/a - R = 0.45 m): mu g = 1.96 holds it, 0.098 does not
+    along = ball("0", "0.95", "1", "0", radius="0.05")
+    held = simulate(table_scene(ELLIPSE, [along], cushion="slide", cushion_k="0.8", friction="0.2", t_end=20))
+    assert held.status is Status.COMPLETED and list(held.collision_table()["law_flag"]) == [SETTLED]
+    skid = simulate(table_scene(ELLIPSE, [along], cushion="slide", cushion_k="0.8", friction="0.01", t_end=20))
+    assert skid.status is Status.FAILED and "would skid" in skid.message and "0.635" in skid.message
 
 
 def test_the_figure_draws_a_ride_along_the_curve():

@@ -462,7 +462,7 @@ class _Run:
         if grazing and speed2 > self.zero:
             why = ("the ball slides on the cloth, and sliding along a cushion is not modelled"
                    if self.system.ride else "impacts accumulate: the ball settles onto the cushion; riding it is "
-                   "modelled only for the rolling cushion model with k < 1")
+                   "modelled only for k < 1")
             self.stop(Status.FAILED, f"ball {k + 1} moves along the curved cushion at t = {float(self.t):.17g} s with a "
                                      f"normal speed {float(vn / sqrt(speed2)):.3g} of its speed, too slow to resolve its "
                                      f"next impact ({why})")
@@ -521,6 +521,30 @@ class _Run:
                 changed = True
         return changed
 
+    def skids(self, k: int) -> bool:
+        """Under the ``slide`` cushion model (a physical cushion: its force through the centre, no torque) a
+        ball rolls along the curved cushion only while the cloth's friction can turn its spin with it:
+        m (kappa - 1)/kappa v^2 / rho <= mu m g, rho the least radius of curvature of its centre's curve
+        (its speed is constant on the ride, and it goes round the whole curve). Otherwise the run stops:
+        the ball would skid, sliding along a cushion is not modelled. (The ``rolling`` model keeps rolling
+        by its definition, paper section 7.2.) True: stopped."""
+        body = self.scene.balls[k].body
+        if self.scene.cushion.keeps_rolling or body.is_particle or body.kappa == 1:
+            return False
+        s = STATE_PER_BALL * k
+        vx, vy = float(self.state[s + 2]), float(self.state[s + 3])
+        rho = self.scene.boundary.least_curvature_radius(body.radius)
+        kappa = float(body.kappa)
+        needed = (kappa - 1) / kappa * (vx * vx + vy * vy) / rho
+        available = float(self.scene.friction * self.scene.g)
+        if needed <= available:
+            return False
+        self.stop(Status.FAILED, f"ball {k + 1} settles onto the curved cushion at t = {float(self.t):.17g} s but would "
+                                 f"skid along it: keeping it rolling on the tightest bend needs (kappa - 1)/kappa v^2/rho "
+                                 f"= {needed:.3g} m/s^2 of the cloth's friction, mu g = {available:.3g} (cushion model "
+                                 "slide); sliding along a cushion is not modelled")
+        return True
+
     def check_pressed_pair(self, contact: Contact) -> None:
         """Stop where a riding ball and a ball touching it stay pressed together: a contact mode that is not
         modelled. After the instant the pair opens at v and its gap's acceleration a < 0 (the riding ball's
@@ -575,6 +599,8 @@ class _Run:
         law_flag SETTLED, whose energy change is what the rest of the accumulation would dissipate.
         """
         s = STATE_PER_BALL * k
+        if self.skids(k):
+            return
         before = list(self.state)
         energy_before = self.energy(before)
         _, c = self.system.walls[(k, 0)]

@@ -19,7 +19,7 @@ parameters per ball, switched by the driver at events; the wall constants
 so one compiled integrator serves every scene of the same shape.
 
 Riding a curved cushion (compiled only where it can happen: a curved
-cushion, the rolling cushion model, k < 1). With k < 1 every impact on a
+cushion with k < 1). With k < 1 every impact on a
 convex cushion scales the normal speed by k and keeps the tangential one:
 the impacts accumulate in a finite time (a Zeno sequence) and, in their
 limit, the ball rolls on along the cushion, pressed against it. The driver
@@ -120,9 +120,9 @@ def can_slide(scene: TableScene, k: int) -> bool:
 
 
 def can_ride(scene: TableScene) -> bool:
-    """A ball can settle onto the cushion and ride it: a curved cushion that keeps rolling, with k < 1."""
-    return (scene.boundary.kind in ("ellipse", "circle") and scene.cushion.keeps_rolling
-            and scene.cushion.restitution < 1)
+    """A ball can settle onto the cushion and ride it: a curved cushion with k < 1 (either cushion model; under
+    ``slide`` only a ball the cloth's friction keeps rolling along it, driver._Run.ride)."""
+    return scene.boundary.kind in ("ellipse", "circle") and scene.cushion.restitution < 1
 
 
 def table_system(scene: TableScene, precision: Precision) -> TableSystem:
