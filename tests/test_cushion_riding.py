@@ -190,6 +190,19 @@ def test_review_cases_of_riding():
         assert result.energy_initial - result.energy_final == pytest.approx(lost, rel=1e-12)
 
 
+def test_impulses_on_a_hit_riding_ball_take_its_cushion_in_one_solution():
+    """Second review: the pair resolved alone, then pair and cushion together, put an impulse on the separating
+    pair and made energy (0.714 -> 1.1235 J in one row). The riding ball's cushion is in the first solution."""
+    balls = [ball("0", "-0.9", "1", "0"), ball("0.0", "-0.5", "1", "-2")]
+    result = simulate(table_scene(CIRCLE, balls, cushion_k="0.95", simultaneous="impulses", t_end=3))
+    assert result.status is Status.COMPLETED, result.message
+    table = result.collision_table()
+    assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
+    assert result.energy_final < result.energy_initial
+    hit = table[table["t"] == table["t"][1]]
+    assert list(hit["law_flag"]) == [2, 2] and {(r["i"], r["j"]) for r in hit} == {(1, 2), (1, 0)}
+
+
 def test_the_rows_of_one_simultaneous_resolution_add_up_to_its_energy_change():
     balls = [ball("-0.6", "0.0", "1.0", "0.0", mass="1"), ball("0.0", "0.0", "0", "0", mass="1"),
              ball("0.2", "0.0", "0", "0", mass="1"), ball("0.4", "0.0", "0", "0", mass="1")]

@@ -81,6 +81,7 @@ class _Run:
         #: leave(): the first step (an ulp of the table's size) and the margin, in ulps of the gap's terms
         self.nudge = num(precision.epsilon) * self.geometry.size
         self.round_off = num(2.0**8 * precision.epsilon)
+        self.solver_tolerance = num(2.0**20 * precision.epsilon)
         #: (v_n / v)^2 below which a ball grazing a curved cushion cannot be followed (check_grazing):
         #: the chord's dip v_n^2 rho/(2 v^2) under the contact resolution, rho the least radius of curvature
         curvature = scene.boundary.least_curvature_radius(max(b.body.radius for b in scene.balls)) \
@@ -311,34 +312,40 @@ class _Run:
         if fired is not None and not impulses:
             self.resolve(fired)
         first = fired if impulses else None
-        solved = False  # the last round was one simultaneous resolution
+        cleanup = False  # 'impulses' after its simultaneous resolution: what it left, one by one
         for _ in range(MAX_AT_ONE_INSTANT):
             if self.status is not None:
                 if not impulses:
                     return
                 break
             near = geometry.contacts(self.state, geometry.touch)
-            changed = self.settle_riders(near) if self.system.ride else False
-            if impulses:
-                # one simultaneous resolution leaves nothing approaching (to the solver's tolerance); another
-                # round only where a ball settled onto its cushion or left it since
-                if solved and not changed:
-                    break
-                # a riding ball's cushion takes part only where the ball is driven into it (closing)
-                touching = [c for c in near if not (c.kind == "wall" and self.riding[c.i]) or self.closing(c)]
+            if self.system.ride:
+                self.settle_riders(near)
+            if impulses and not cleanup:
+                # A riding ball's cushion takes part where the ball is driven into it or hit by a ball (the
+                # ball presses on it as the impact happens; resolving the pair first and the cushion in a
+                # second solution put impulses on a separating pair and made energy: review).
+                hit = {b for c in near if c.kind == "pair" and self.closing(c) for b in (c.i, c.j)}
+                if first is not None and first.kind == "pair":
+                    hit.update((first.i, first.j))
+                touching = [c for c in near
+                            if not (c.kind == "wall" and self.riding[c.i]) or c.i in hit or self.closing(c)]
                 if first is not None and not any(_same(first, c) for c in touching):
                     touching.append(first)
                 approaching = [c for c in touching if self.closing(c)]
                 if not approaching:
                     break
-                solved = len(touching) > 1
-                if solved:
+                if len(touching) > 1:
                     self.simultaneous(touching)
+                    cleanup = True
                 else:  # one impact alone: the scene's law itself
                     self.resolve(approaching[0] if first is None or not _same(first, approaching[0]) else first)
                 first = None
             else:
-                waiting = [c for c in near if self.closing(c)]
+                # 'impulses' leaves nothing approaching to its solver's tolerance (projected Gauss-Seidel beyond
+                # MAX_SIMULTANEOUS contacts); what approaches faster (Hedrih's law on unequal radii inside the
+                # solution, a ball settled since) goes by the scene's law, in order
+                waiting = [c for c in near if self.closing(c) and (not cleanup or self.beyond_solver(c))]
                 if not waiting:
                     break
                 self.resolve(waiting[0])
@@ -381,6 +388,15 @@ class _Run:
             vx, vy = self.state[s + 2], self.state[s + 3]
             return speed * speed >= self.grazing * (vx * vx + vy * vy)
         return True
+
+    def beyond_solver(self, contact: Contact) -> bool:
+        """The contact approaches faster than a simultaneous solution's tolerance (2^20 ulps of the speeds)."""
+        s = STATE_PER_BALL * contact.i
+        scale = abs(self.state[s + 2]) + abs(self.state[s + 3])
+        if contact.kind == "pair":
+            o = STATE_PER_BALL * contact.j
+            scale = scale + abs(self.state[o + 2]) + abs(self.state[o + 3])
+        return self.geometry.approach(contact, self.state) > self.solver_tolerance * scale
 
     def resolve(self, contact: Contact) -> None:
         before = list(self.state)
@@ -479,7 +495,7 @@ class _Run:
         return self.pars[BALL_PARS * k + SLIDING] != self.zero or self.state[s + 4] != self.zero \
             or self.state[s + 5] != self.zero
 
-    def settle_riders(self, near: list) -> None:
+    def settle_riders(self, near: list) -> bool:
         """The balls on a curved cushion at this instant, before a round of impacts (system.can_ride).
 
         A ball that grazes its cushion (normal speed under the grazing limit) and rolls starts riding it
