@@ -368,6 +368,10 @@ class _Run:
                 self.check_cushion_contact(c)
             elif self.riding[c.i] or self.riding[c.j]:
                 self.check_pressed_pair(c)
+        for k, on in enumerate(self.riding):  # wherever round-off has put it
+            if on and self.slides(k):
+                self.stop(Status.FAILED, f"ball {k + 1} slides on the cloth along the curved cushion at "
+                                         f"t = {float(self.t):.17g} s: sliding along a cushion is not modelled")
         # every touching contact but the one that fired (it has its cooldown, system.TableSystem.cooldown)
         # is opened past round-off, resolved now or not: one whose gap starts a step at zero would
         # close unseen if the motion turns it (a re-roll, friction)
@@ -471,10 +475,7 @@ class _Run:
         speed2 = vx * vx + vy * vy
         grazing = self.grazing is not None and vn * vn < self.grazing * speed2
         if self.riding[k]:
-            if self.slides(k):
-                self.stop(Status.FAILED, f"ball {k + 1} slides on the cloth along the curved cushion at "
-                                         f"t = {float(self.t):.17g} s: sliding along a cushion is not modelled")
-            return
+            return  # at_instant stops a riding ball that slides
         if grazing and speed2 > self.zero:
             why = ("the ball slides on the cloth, and sliding along a cushion is not modelled"
                    if self.system.ride else "impacts accumulate: the ball settles onto the cushion; riding it is "
