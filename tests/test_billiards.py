@@ -485,7 +485,7 @@ def test_ctrl_c_leaves_a_complete_table_and_summary(tmp_path):
     assert all(len(r) == len(rows[0]) and r["reflection_angle"] != "" for r in rows)
 
 
-@pytest.mark.parametrize("name", ["elliptical_billiard", "cut_shot", "newtons_cradle"])
+@pytest.mark.parametrize("name", ["elliptical_billiard", "cut_shot", "newtons_cradle", "dissipative_ellipse"])
 def test_the_table_examples_run(name):
     from heyroll.interfaces.scene_file import load_scene
 
@@ -498,6 +498,9 @@ def test_the_table_examples_run(name):
         first = table[table["t"] == table["t"][0]]
         assert [(r["i"], r["j"]) for r in first] == [(1, 2), (2, 3), (3, 4)]
         assert first["vx_j_after"][-1] == 1.0 and first["vx_i_after"][-1] == 0.0
+    if name == "dissipative_ellipse":  # balls settle onto the cushion, ride it, are knocked off, settle again
+        longer = simulate(scene, t_end=100)
+        assert longer.status is Status.COMPLETED and list(longer.collision_table()["law_flag"]).count(4) >= 5
 
 
 def test_a_ball_settling_onto_a_curved_cushion_rides_it():
