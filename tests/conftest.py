@@ -31,3 +31,14 @@ def body(shape="solid_sphere", radius="0.1", mass="1.0", phi="0.0", dphi="0.0", 
     if extra:
         lines.append(extra)
     return "\n".join(lines) + "\n"
+
+
+@pytest.fixture(autouse=True)
+def _handlers_built_per_test():
+    """The engine caches a mode's event handlers between runs (simulation.driver._handlers): a test that
+    replaces a handler factory (monkeypatch) must not meet handlers another test built, nor leave its own."""
+    from heyroll.simulation.driver import forget_handlers
+
+    forget_handlers()
+    yield
+    forget_handlers()

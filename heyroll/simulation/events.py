@@ -136,6 +136,21 @@ class CollisionLog:
     def count(self) -> int:
         return self.flushed + len(self.records)
 
+    def reset(self, max_collisions: int | None, max_events: int | None, record_modes: list | None) -> "CollisionLog":
+        """This log made new for another run, in place: the handlers built on it (and cached with it,
+        driver._handlers) hold its lists and its stop request, not copies."""
+        self.records.clear()
+        self.max_collisions, self.max_events, self.record_modes = max_collisions, max_events, record_modes
+        self.stop.reason, self.stop.message, self.stop.data = None, "", {}
+        self.flushed = self.fallbacks = self.mode_changes = self.passages_flushed = 0
+        self.limiter_impacts = self.friction_transitions = 0
+        self.chunk_size = 1 << 62
+        self.on_full = self.on_passages_full = None
+        self.warnings.clear()
+        self.passages.clear()
+        self.strobe.clear()
+        return self
+
 
 def mode_handlers(
     scene, system: SceneSystem, log: CollisionLog, holder: list, time_scale: float, pieces=None, friction=None
@@ -753,7 +768,6 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
     k = float(scene.law.restitution)
     records = log.records
     append = records.append
-    limit = log.max_collisions
     stop = log.stop
     law_name = system.law_name
     strict = scene.on_inconsistent == "error"
@@ -804,6 +818,7 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         append((t, pair_index, before, vi_new, vj_new, flag))
         s[vi_index] = vi_new
         s[vj_index] = vj_new
+        limit = log.max_collisions
         if limit is not None and log.flushed + len(records) >= limit:
             return stop_at_max_collisions(stop, limit)
         return True
@@ -857,7 +872,7 @@ def _two_body_callback(c: dict):
     vi_index, vj_index, i, j = c["vi_index"], c["vj_index"], c["i"], c["j"]
     apply, fallback, tiny, strict, resolve = c["apply"], c["fallback"], c["tiny"], c["strict"], c["resolve"]
     append, records, log, stop, pair_index = c["append"], c["records"], c["log"], c["stop"], c["pair_index"]
-    limit, gap_constant, settle, h_bound, t_bound = c["limit"], c["gap_constant"], c["settle"], c["h_bound"], c["t_bound"]
+    gap_constant, settle, h_bound, t_bound = c["gap_constant"], c["settle"], c["h_bound"], c["t_bound"]
     a_i_stiff, a_j_stiff, k, time_scale, eps = c["a_i_stiff"], c["a_j_stiff"], c["k"], c["time_scale"], c["eps"]
     sin, cos = math.sin, math.cos
 
@@ -882,6 +897,7 @@ def _two_body_callback(c: dict):
         append((t, pair_index, before, vi_new, vj_new, flag))
         s[vi_index] = vi_new
         s[vj_index] = vj_new
+        limit = log.max_collisions
         if limit is not None and log.flushed + len(records) >= limit:
             return stop_at_max_collisions(stop, limit)
         opening = vj_new - vi_new
