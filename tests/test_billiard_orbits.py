@@ -92,3 +92,15 @@ def test_the_birkhoff_portrait_of_a_circle_keeps_each_launch_at_one_angle(tmp_pa
     rows = (tmp_path / "bp" / "birkhoff_portrait.csv").read_text().splitlines()
     assert rows[0] == "run,theta,p,n,boundary_s,sin_reflection_angle" and len(rows) == 1 + 3 * 20
     assert (tmp_path / "bp" / "birkhoff_portrait.png").stat().st_size > 0
+
+
+def test_the_birkhoff_portrait_of_a_dissipative_table_ends_where_each_launch_settles():
+    """k < 1: a launch's ball settles onto the cushion and rides it (no impact comes any more): the launch ends
+    at its time bound with fewer points, its reflection angles drawn towards grazing (was: never ended)."""
+    from heyroll.analysis.billiard_portrait import birkhoff_portrait
+
+    scene = table_scene('boundary = "circle"\nradius = 1.0', [ball("0.2", "0.1", "0.6", "0.9")], cushion_k="0.5")
+    launches = birkhoff_portrait(scene, runs=4, impacts=200)  # p = +-0.2375, +-0.7125: none head-on
+    for run in launches:
+        assert run["status"] == "completed" and 5 < len(run["s"]) < 200
+        assert abs(run["sin_angle"][-1]) > 0.999 > abs(run["sin_angle"][0])

@@ -26,7 +26,12 @@ def birkhoff_portrait(scene, runs: int = 12, impacts: int = 300, ball: int = 1, 
                       progress=None) -> list[dict]:
     """``runs`` launches of ball ``ball`` alone (the other balls removed), ``impacts`` cushion impacts each.
 
-    Returns per launch: theta, p (the launch), status, and the arrays ``s``, ``sin_angle``.
+    Returns per launch: theta, p (the launch), status, and the arrays ``s``, ``sin_angle``. A launch runs
+    until its ``impacts``-th impact or for ``impacts`` times the longest a chord can take (the table's
+    extent twice over at the launch speed), so that a ball that settles onto a cushion with k < 1 (it
+    rides it: no impact comes any more) ends; it then has fewer points, status completed. A launch
+    interrupted (Ctrl-C) ends the portrait: the launches so far are returned, the last one with status
+    interrupted.
     """
     from ..simulation.driver import simulate
 
@@ -39,6 +44,8 @@ def birkhoff_portrait(scene, runs: int = 12, impacts: int = 300, ball: int = 1, 
     template = scene.balls[ball - 1]
     radius = template.body.radius
     speed = float(mpmath.sqrt(template.vx**2 + template.vy**2)) or 1.0
+    bx, by = scene.boundary.outline()
+    longest_chord = 2 * float(max(np.ptp(bx), np.ptp(by))) / speed
     golden = (np.sqrt(5) - 1) / 2
     out = []
     for k in range(runs):
@@ -54,11 +61,13 @@ def birkhoff_portrait(scene, runs: int = 12, impacts: int = 300, ball: int = 1, 
                                        vx=mpmath.mpf(speed * direction[0]), vy=mpmath.mpf(speed * direction[1]),
                                        ux=mpmath.mpf(0), uy=mpmath.mpf(0))
         alone = dataclasses.replace(scene, balls=(launched,))
-        result = simulate(alone, t_end=1e300, max_collisions=impacts, max_events=None)
+        result = simulate(alone, t_end=impacts * longest_chord, max_collisions=impacts, max_events=None)
         table = result.collision_table()
         cushion = table[table["j"] == 0]
         out.append({"theta": theta, "p": p, "status": result.status.value, "message": result.message,
                     "s": cushion["boundary_s"], "sin_angle": np.sin(cushion["reflection_angle"])})
         if progress is not None:
             progress(k + 1, runs)
+        if result.status.value == "interrupted":
+            break
     return out

@@ -358,7 +358,8 @@ def _billiard_portrait(args) -> int:
     scene = _table_scene(args.scene, "portrait")
     out = _out_dir(args.out)
     _writable(out)
-    launches = birkhoff_portrait(scene, runs, impacts, ball)
+    with _sigterm_as_interrupt():
+        launches = birkhoff_portrait(scene, runs, impacts, ball)
     lines = ["run,theta,p,n,boundary_s,sin_reflection_angle"]
     for k, run in enumerate(launches, start=1):
         lines += [f"{k},{run['theta']:.17g},{run['p']:.17g},{n},{s:.17g},{q:.17g}"
@@ -367,10 +368,10 @@ def _billiard_portrait(args) -> int:
     portrait_figure(scene, launches, out / "birkhoff_portrait.png")
     stopped = [f"{k}: {run['status']}" for k, run in enumerate(launches, start=1)
                if run["status"] not in ("max_collisions", "completed")]
-    print(f"{runs} launches of ball {ball}, {sum(len(r['s']) for r in launches)} cushion impacts"
+    print(f"{len(launches)} launches of ball {ball}, {sum(len(r['s']) for r in launches)} cushion impacts"
           + (f"; stopped early: {', '.join(stopped)}" if stopped else ""))
     print(f"wrote {out}/birkhoff_portrait.png, {out}/birkhoff_portrait.csv")
-    return EXIT_OK
+    return EXIT_INTERRUPTED if launches and launches[-1]["status"] == "interrupted" else EXIT_OK
 
 
 def _billiard_orbits(args) -> int:

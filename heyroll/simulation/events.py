@@ -863,15 +863,12 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
 
 def _two_body_callback(c: dict):
     """The callback of the most common mode, two free bodies on a fixed circle (no cascade, friction or
-    forcing), with ``resolve`` and ``close_collision`` inlined: the same arithmetic and records as
-    ``on_any_collision`` in :func:`_make_callback` (``c``: its locals), two Python calls fewer per collision
-    (measured 6% of the default scene's run). A deliberate copy of ``resolve``'s arithmetic for the hot
-    path: tests/test_hot_path.py holds the two to the same bits on every path (law, fallback, strict stop,
-    max_collisions, persistent contact)."""
+    forcing): ``on_any_collision`` of :func:`_make_callback` (``c``: its locals) without its branches for
+    cascades, forcing and friction, and with ``close_collision`` inlined (measured 2-5% of the default
+    scene's run). tests/test_hot_path.py holds the two to the same bits on every path (law, fallback,
+    strict stop, max_collisions, persistent contact)."""
     holder, touched, number, reopened = c["holder"], c["touched"], c["number"], c["reopened"]
-    vi_index, vj_index, i, j = c["vi_index"], c["vj_index"], c["i"], c["j"]
-    apply, fallback, tiny, strict, resolve = c["apply"], c["fallback"], c["tiny"], c["strict"], c["resolve"]
-    append, records, log, stop, pair_index = c["append"], c["records"], c["log"], c["stop"], c["pair_index"]
+    i, j, resolve, records, log = c["i"], c["j"], c["resolve"], c["records"], c["log"]
     gap_constant, settle, h_bound, t_bound = c["gap_constant"], c["settle"], c["h_bound"], c["t_bound"]
     a_i_stiff, a_j_stiff, k, time_scale, eps = c["a_i_stiff"], c["a_j_stiff"], c["k"], c["time_scale"], c["eps"]
     sin, cos = math.sin, math.cos
@@ -884,22 +881,10 @@ def _two_body_callback(c: dict):
         dtime = ta.dtime
         touched[number] = dtime
         t = dtime[0]
-        vi = before[vi_index]
-        vj = before[vj_index]
-        vi_new, vj_new = apply(vi, vj)
-        flag = 0
-        if vj_new - vi_new < -tiny * (vi - vj):
-            if strict:  # the general path records it and stops the run
-                return resolve(s, before, t)
-            vi_new, vj_new = fallback.apply(vi, vj)
-            flag = 1
-            log.fallbacks += 1
-        append((t, pair_index, before, vi_new, vj_new, flag))
-        s[vi_index] = vi_new
-        s[vj_index] = vj_new
-        limit = log.max_collisions
-        if limit is not None and log.flushed + len(records) >= limit:
-            return stop_at_max_collisions(stop, limit)
+        if not resolve(s, before, t):
+            return False
+        record = records[-1]
+        vi_new, vj_new = record[3], record[4]
         opening = vj_new - vi_new
         phi_i, phi_j = before[i], before[j]
         gap = phi_j - phi_i + gap_constant
