@@ -212,3 +212,19 @@ def test_the_rows_of_one_simultaneous_resolution_add_up_to_its_energy_change():
     assert np.count_nonzero(table["law_flag"] == 2) >= 2
     lost = np.sum(table["energy_before"] - table["energy_after"])
     assert result.energy_initial - result.energy_final == pytest.approx(lost, rel=1e-12)
+
+
+@pytest.mark.parametrize("boundary, launch", [
+    ('boundary = "rectangle"\nwidth = 1.0\nheight = 1.0', ("0", "0", "3", "0")),
+    ('boundary = "circle"\nradius = 0.5', ("0", "0", "3.0", "2.5")),
+], ids=["rectangle", "circle"])
+def test_a_ball_that_friction_presses_on_the_cushion_stops_the_run_not_an_overlap(boundary, launch):
+    """Acceptance review: a ball sliding into the cushion (slide model, k_c = 0.3, mu = 0.01) bounces ever lower
+    while friction drives it back (a Zeno sequence over before its slip ends); it passed through the cushion
+    unseen (status overlap, an impact row outside the table). Now: pressed against the cushion, not modelled."""
+    scene = table_scene(boundary, [ball(*launch, radius="0.05")], cushion="slide", cushion_k="0.3", friction="0.01",
+                        t_end=60)
+    result = simulate(scene)
+    assert result.status is Status.FAILED and "pressed against the cushion" in result.message
+    table = result.collision_table()
+    assert np.all(np.abs(table["x_i"]) <= 0.5) and np.all(np.abs(table["y_i"]) <= 0.5)
