@@ -501,6 +501,9 @@ def test_the_table_examples_run(name):
     if name == "dissipative_ellipse":  # balls settle onto the cushion, ride it, are knocked off, settle again
         longer = simulate(scene, t_end=100)
         assert longer.status is Status.COMPLETED and list(longer.collision_table()["law_flag"]).count(4) >= 5
+        summary = longer.summary()
+        assert summary["riding_final"] == list(longer.riding_final) and set(summary["riding_final"]) <= {1, 2, 3}
+        assert summary["steps"] > 0 and summary["settings"]["tolerance"] == 2.0**-52
 
 
 def test_a_ball_settling_onto_a_curved_cushion_rides_it():

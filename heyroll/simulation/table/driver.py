@@ -89,7 +89,7 @@ class _Run:
         self.grazing = None if curvature is None else num(2 * float(self.geometry.touch) / curvature)
         self.grazing_straight = num(2.0**10 * precision.epsilon) ** 2
         self.t = num(0)
-        self.count = self.cushion = self.rerolls = self.events = 0
+        self.count = self.cushion = self.rerolls = self.events = self.steps = 0
         self.records: list = []
         self.kept: list | None = None  # with a sink: the first chunk, kept for the result
         self.flushed = 0
@@ -125,7 +125,9 @@ class _Run:
         n_events = len(self.system.events)
         while self.status is None:
             before = ta.time
-            outcome = ta.propagate_until(self.t_end, max_steps=STEP_CHUNK, max_delta_t=self.max_step)[0]
+            propagated = ta.propagate_until(self.t_end, max_steps=STEP_CHUNK, max_delta_t=self.max_step)
+            outcome = propagated[0]
+            self.steps += int(propagated[3])
             self.t = ta.time
             if outcome == time_limit:
                 self.pull()
@@ -753,7 +755,11 @@ class _Run:
             state_initial=self.state_initial, state_final=list(self.state), energy_initial=self.energy_initial,
             energy_final=float(self.energy(self.state)), n_collisions=self.count, n_cushion=self.cushion,
             n_rerolls=self.rerolls, records=records, paths=self.paths, wall_time_s=wall,
-            settings={"precision": self.precision.name, "t_end": float(self.t_end), "max_collisions": self.limit},
+            settings={"precision": self.precision.name, "t_end": float(self.t_end), "max_collisions": self.limit,
+                      "tolerance": float(self.options.get("tol", self.precision.epsilon)),
+                      "high_accuracy": bool(self.options["high_accuracy"]),
+                      "fast_math": bool(self.options.get("fast_math", False))},
+            steps=self.steps, riding_final=tuple(k + 1 for k, on in enumerate(self.riding) if on),
         )
 
 

@@ -80,9 +80,10 @@ class TableResult:
 
     ``records`` are the impacts kept in memory (all of them without a sink;
     the first chunk with one); ``n_collisions`` counts every impact.
-    ``paths``: (t, state, accelerations) at the start of each piece of
-    motion (up to ``MAX_PATH_PIECES``), for figures: between events every
-    ball moves with constant acceleration.
+    ``paths``: (t, state, accelerations, riding balls) at the start of each
+    piece of motion (up to ``MAX_PATH_PIECES``), for figures: between events
+    every ball moves with constant acceleration, or rides the cushion.
+    ``riding_final``: the balls (1-based) riding the cushion at the end.
     """
 
     scene: TableScene
@@ -101,6 +102,8 @@ class TableResult:
     paths: list = field(default_factory=list)
     wall_time_s: float = 0.0
     settings: dict = field(default_factory=dict)
+    steps: int = 0
+    riding_final: tuple = ()
 
     kind = "table"
 
@@ -129,9 +132,12 @@ class TableResult:
             "ball_collisions": self.n_collisions - self.n_cushion,
             "rerolls": self.n_rerolls,
             "t_final": float(self.t_final),
+            "t_final_text": self.precision.format(self.t_final),
             "energy_initial": self.energy_initial,
             "energy_final": self.energy_final,
+            "steps": self.steps,
             "precision": self.precision.name,
+            "significant_digits": self.precision.digits,
             "law": self.scene.law.name,
             "restitution": float(self.scene.law.restitution),
             "cushion_model": self.scene.cushion.name,
@@ -143,6 +149,7 @@ class TableResult:
                  "vy": final[6 * k + 3], "slip_x": final[6 * k + 4], "slip_y": final[6 * k + 5]}
                 for k in range(n)
             ],
+            "riding_final": list(self.riding_final),
             "wall_time_s": self.wall_time_s,
             "settings": self.settings,
         }
