@@ -7,6 +7,11 @@ a ``ValueError``.
 
 from __future__ import annotations
 
+import re
+
+#: A number as Python shows it (the scene file's decimals, mpmath's numbers): shown as the user wrote it.
+_NUMBER_REPR = re.compile(r"(?:Decimal|mpf)\('([^']*)'\)")
+
 
 class SceneError(ValueError):
     """A scene (bodies, track, law, run settings) breaks a rule.
@@ -16,7 +21,8 @@ class SceneError(ValueError):
 
     def __init__(self, field: str, rule: str):
         self.field = field
-        self.rule = rule
+        # "got Decimal('-0.2')" reads "got -0.2": rules format their values with !r (strings get quotes)
+        self.rule = rule = _NUMBER_REPR.sub(r"\1", rule)
         super().__init__(f"{field}: {rule}")
 
 

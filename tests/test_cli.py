@@ -234,3 +234,14 @@ def test_fast_and_tolerance_are_run_settings_recorded_in_the_summary(tmp_path):
 def test_python_dash_m_heyroll_is_the_command_line():
     done = subprocess.run([sys.executable, "-m", "heyroll", "--version"], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and heyroll.__version__ in done.stdout + done.stderr
+
+
+def test_bad_numbers_are_shown_as_written(tmp_path, capsys):
+    """Acceptance review: 'got Decimal('-0.2')' (the scene file's decimals by their Python repr)."""
+    path = tmp_path / "negmu.toml"
+    path.write_text(scene_text(body(), track='type = "circle"\nradius = 1.0\nfriction = -0.2'))
+    assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "track.friction" in err and "got -0.2" in err and "Decimal" not in err
+    assert main(["sweep", str(path), "--vary", "collision.restitution=0:1:3", "--workers", "-2"]) == 2
+    assert "--workers: must be >= 1, got -2" in capsys.readouterr().err

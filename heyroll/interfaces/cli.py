@@ -54,13 +54,13 @@ def _tolerance(text: str) -> float:
     return value
 
 
-def _collision_count(text: str, field: str = "--max-collisions") -> int:
+def _collision_count(text: str, field: str = "--max-collisions", least: int = 0) -> int:
     try:
         value = int(text)
     except ValueError:
         raise BadInput(field, f"must be a whole number, got {text!r}") from None
-    if value < 0:
-        raise BadInput(field, f"must be >= 0, got {value}")
+    if value < least:
+        raise BadInput(field, f"must be >= {least}, got {value}")
     return value
 
 
@@ -535,9 +535,7 @@ def _sweep(args, argv: list) -> int:
     _sweep_extra()
     t_end = _positive_time(args.t_end) if args.t_end is not None else None
     max_collisions = _collision_count(args.max_collisions) if args.max_collisions is not None else ...
-    workers = _collision_count(args.workers, "--workers") if args.workers is not None else None
-    if workers == 0:
-        raise BadInput("--workers", "must be >= 1")
+    workers = _collision_count(args.workers, "--workers", least=1) if args.workers is not None else None
     if workers is not None and args.scheduler is not None:
         raise BadInput("--workers", "a --scheduler's cluster has its own workers: give one or the other")
     out = _out_dir(args.out)
