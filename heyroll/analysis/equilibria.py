@@ -64,11 +64,9 @@ class Equilibrium:
     q_end: float | None = None
 
     def as_json(self) -> dict:
-        """x (the contact point's abscissa) and type, then the track's coordinate q (phi on a circle: the top
-        is -pi there, where x is 0 as at the bottom), the stiffness h'(q) and V/m."""
-        data = {"x": self.x, "type": self.type, "q": self.q, "stiffness": self.stiffness, "potential": self.potential}
+        data = {"x": self.x, "type": self.type}
         if self.x_end is not None:
-            data["x_end"], data["q_end"] = self.x_end, self.q_end
+            data["x_end"] = self.x_end
         return data
 
 
