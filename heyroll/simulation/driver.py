@@ -203,7 +203,7 @@ def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResul
 
 #: Each thread's logs free for a run (a run inside a run, from a progress callback or a sink, takes another).
 _RUN_LOGS = threading.local()
-#: Handler sets cached on one log (by system and scene constants) at most; beyond, the cache starts again.
+#: Handler sets cached on one log (by system and scene constants), least recently used dropped first.
 HANDLER_SETS = 64
 
 
@@ -215,7 +215,7 @@ def _take_log(max_collisions, max_events, record_modes) -> CollisionLog:
     if free:
         return free.pop().reset(max_collisions, max_events, record_modes)
     log = CollisionLog(max_collisions=max_collisions, max_events=max_events, record_modes=record_modes)
-    log.handler_sets = {}
+    log.handler_sets = CompiledCache(HANDLER_SETS)
     return log
 
 
@@ -232,15 +232,13 @@ def _handlers(scene: Scene, system: SceneSystem, log: CollisionLog, time_scale: 
     if friction is not None or not system.linear_gap:
         holder = [None, None, None]
         return (holder,) + tuple(mode_handlers(scene, system, log, holder, time_scale, pieces, friction))
-    key = (id(system), scene.constants, time_scale)
-    entry = log.handler_sets.get(key)
-    if entry is None or entry[0] is not system:
-        if len(log.handler_sets) >= HANDLER_SETS:
-            log.handler_sets.clear()
+
+    def build():
         holder = [None, None, None]
-        entry = (system, holder) + tuple(mode_handlers(scene, system, log, holder, time_scale, pieces, None))
-        log.handler_sets[key] = entry
-    return entry[1:]
+        return (system, holder) + tuple(mode_handlers(scene, system, log, holder, time_scale, pieces, None))
+
+    # by the system's identity: the entry holds the system, so no other object can take its id meanwhile
+    return log.handler_sets.get((id(system), scene.constants, time_scale), build)[1:]
 
 
 def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> SimulationResult:

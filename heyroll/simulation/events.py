@@ -106,6 +106,8 @@ class CollisionLog:
     #: Rough tracks: per record, the friction modes of its bodies i, j before and after, and the
     #: speeds u_i, u_j their spins would roll at where they slip (nan where they roll) (else None).
     record_modes: list | None = None
+    #: The mode handlers built on this log, kept for its next runs (simulation.driver._handlers)
+    handler_sets: object = None
 
     def record_passage(self, row: tuple) -> bool:
         """Keep a passage (see ``passages``); False: max_events is reached, the run stops."""

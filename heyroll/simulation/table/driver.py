@@ -598,7 +598,7 @@ class _Run:
         nx, ny = (float(v) for v in contact.normal)
         vi = float(self.state[si + 2]), float(self.state[si + 3])
         vj = float(self.state[sj + 2]), float(self.state[sj + 3])
-        ai, aj = self._acceleration(i), self._acceleration(j)
+        ai, aj = self._present_acceleration(i), self._present_acceleration(j)
         rvx, rvy = vj[0] - vi[0], vj[1] - vi[1]
         opening = rvx * nx + rvy * ny
         tangential2 = rvx * rvx + rvy * rvy - opening * opening
@@ -610,7 +610,7 @@ class _Run:
                                      f"while ball {rider} rides the cushion (the cushion turns it into the other): "
                                      "balls in persistent contact are not modelled")
 
-    def _acceleration(self, k: int) -> tuple:
+    def _present_acceleration(self, k: int) -> tuple:
         """Ball k's acceleration now (float): its sliding one, or, riding, the cushion's -lambda grad g (the
         Hessian of g along v by central differences of its gradient: for a decision, not the motion)."""
         b, s = BALL_PARS * k, STATE_PER_BALL * k
