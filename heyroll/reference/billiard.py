@@ -23,7 +23,9 @@ by geometry rather than through the engine's gap polynomials:
 
 Only rolling motion (no `slide` model, no initial slip) and one impact at a
 time are covered; sliding and simultaneous impacts are checked against
-closed forms in the tests.
+closed forms in the tests. Two contact modes have their own references: a
+ball rolling along an elliptical cushion (:func:`reference_ride`) and a
+ball skidding along a circular one (:func:`reference_skid`).
 """
 
 from __future__ import annotations
@@ -256,3 +258,77 @@ def reference_ride(a, b, radius, x0, y0, vx, vy, duration, dps: int = 40) -> tup
         guess = th0 + sign * 2 * mpmath.pi * rest / perimeter
         th1 = mpmath.findroot(lambda th: sign * mpmath.quad(element, [th0, th]) - rest, guess)
         return curve(th1)
+
+
+def reference_skid(rho, kappa, mu_g, x0, y0, vx, vy, ux, uy, duration, dps: int = 30) -> tuple:
+    """(x, y, vx, vy, ux, uy, nu) of a ball skidding along a circular cushion (its centre on the circle of
+    radius ``rho`` about the origin) after ``duration`` s; nu, the cushion's push per unit mass, < 0 where the
+    ball would have lifted off before (the skid's slip must not reach 0 within ``duration``).
+
+    Independent of the engine's constraint form (heyroll.simulation.table.system: -lambda grad g with the
+    gap's Hessian): here in polar form, the angle th of the centre, its tangential speed V, the slip's
+    tangential and outward components u_t, u_n in the frame turning with the centre:
+
+        V' = f_t,  nu = f_n + V^2/rho (the cushion's push inward, per unit mass),
+        u_t' = kappa/(kappa - 1) f_t - u_n V/rho,  u_n' = kappa/(kappa - 1) f_n - nu + u_t V/rho,
+        th' = V/rho,  f = -mu g (u_t, u_n)/|u|,
+
+    (the cushion's force goes through the centre: it turns v, not the spin; v' = f - nu n, w' = -f/(kappa - 1)
+    with w = v - u), integrated by mpmath's Taylor-series ODE solver at ``dps`` digits.
+    """
+    with mpmath.workdps(dps):
+        rho, kappa, mu_g = (mpmath.mpf(v) for v in (rho, kappa, mu_g))
+        x0, y0, vx, vy, ux, uy, duration = (mpmath.mpf(v) for v in (x0, y0, vx, vy, ux, uy, duration))
+        th0 = mpmath.atan2(y0, x0)
+        tx, ty, nx, ny = -mpmath.sin(th0), mpmath.cos(th0), mpmath.cos(th0), mpmath.sin(th0)
+        ratio = kappa / (kappa - 1)
+
+        def rates(t, z):
+            th, v, ut, un = z
+            slip = mpmath.sqrt(ut * ut + un * un)
+            ft, fn = -mu_g * ut / slip, -mu_g * un / slip
+            nu = fn + v * v / rho
+            return [v / rho, ft, ratio * ft - un * v / rho, ratio * fn - nu + ut * v / rho]
+
+        solution = mpmath.odefun(rates, 0, [th0, vx * tx + vy * ty, ux * tx + uy * ty, ux * nx + uy * ny])
+        th, v, ut, un = solution(duration)
+        nu = -mu_g * un / mpmath.sqrt(ut * ut + un * un) + v * v / rho
+        tx, ty, nx, ny = -mpmath.sin(th), mpmath.cos(th), mpmath.cos(th), mpmath.sin(th)
+        return (rho * nx, rho * ny, v * tx, v * ty, ut * tx + un * nx, ut * ty + un * ny, nu)
+
+
+def reference_skid_end(rho, kappa, mu_g, x0, y0, vx, vy, ux, uy, slip_end, dps: int = 30) -> tuple:
+    """(t, x, y, vx, vy, ux, uy) where the slip of a ball skidding along a circular cushion (as in
+    :func:`reference_skid`) has fallen to ``slip_end``; for a slip that only falls (no inward component at
+    the start: |u|' = -kappa/(kappa - 1) mu g - nu sin(phi) < 0 with nu >= 0, phi its angle from the tangent).
+
+    In time the slip's direction has a branch point where |u| reaches 0 (phi' = V/rho - nu cos(phi)/|u|);
+    here the independent variable is sigma = -log |u| (increasing, as mpmath's solver needs), in which the
+    motion is regular down to |u| = 0:
+
+        d(t, th, V, phi)/d sigma = -|u|/|u|' (1, V/rho, f_t, V/rho - nu cos(phi)/|u|),
+
+    integrated from -log |u0| to -log ``slip_end`` by mpmath's Taylor-series ODE solver at ``dps`` digits."""
+    with mpmath.workdps(dps):
+        rho, kappa, mu_g, slip_end = (mpmath.mpf(v) for v in (rho, kappa, mu_g, slip_end))
+        x0, y0, vx, vy, ux, uy = (mpmath.mpf(v) for v in (x0, y0, vx, vy, ux, uy))
+        th0 = mpmath.atan2(y0, x0)
+        tx, ty, nx, ny = -mpmath.sin(th0), mpmath.cos(th0), mpmath.cos(th0), mpmath.sin(th0)
+        ratio = kappa / (kappa - 1)
+
+        def rates(sigma, z):
+            t, th, v, phi = z
+            slip = mpmath.exp(-sigma)
+            c, s = mpmath.cos(phi), mpmath.sin(phi)
+            nu = -mu_g * s + v * v / rho
+            falling = -ratio * mu_g - nu * s
+            scale = -slip / falling
+            return [scale, scale * v / rho, -scale * mu_g * c, scale * v / rho + nu * c / falling]
+
+        u_t, u_n = ux * tx + uy * ty, ux * nx + uy * ny
+        start = -mpmath.log(mpmath.sqrt(u_t * u_t + u_n * u_n))
+        solution = mpmath.odefun(rates, start, [mpmath.mpf(0), th0, vx * tx + vy * ty, mpmath.atan2(u_n, u_t)])
+        t, th, v, phi = solution(-mpmath.log(slip_end))
+        tx, ty, nx, ny = -mpmath.sin(th), mpmath.cos(th), mpmath.cos(th), mpmath.sin(th)
+        ut, un = slip_end * mpmath.cos(phi), slip_end * mpmath.sin(phi)
+        return (t, rho * nx, rho * ny, v * tx, v * ty, ut * tx + un * nx, ut * ty + un * ny)

@@ -89,12 +89,6 @@ class TableScene:
             raise SceneError("track.friction", f"must be a finite number >= 0, got {friction!r}")
         if not is_finite(g) or to_mpf(g) <= 0:
             raise SceneError("g", f"must be a finite number > 0, got {g!r}")
-        if cushion.restitution == 0 and boundary.kind in ("ellipse", "circle") and not cushion.keeps_rolling:
-            # with no normal speed left the ball would slide on along the curved cushion, pressed against it:
-            # not modelled (a rolling ball rides it: heyroll.simulation.table.system); k > 0 bounces on
-            raise SceneError("track.cushion_restitution", "must be > 0 on a curved cushion (ellipse, circle) with "
-                                                          "cushion_model = slide: at 0 a ball would slide along it "
-                                                          "pressed against it, which is not modelled")
         if simultaneous not in SIMULTANEOUS_POLICIES:
             raise SceneError("collision.simultaneous", f"unknown policy {simultaneous!r}; expected "
                                                        f"{' | '.join(SIMULTANEOUS_POLICIES)}")

@@ -21,8 +21,8 @@ from ..result import Status
 from .contacts import Contact, ContactGeometry
 from .resolve import SETTLED, SIMULTANEOUS, Resolver
 from .result import TableResult
-from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, RIDING, SLIDING,
-                     STATE_PER_BALL, integrator, table_system)
+from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, MODE_PARS, MU_G, RIDE_HOLD, RIDE_SPEED2, RIDING,
+                     SKID, SLIDING, SPIN, STATE_PER_BALL, integrator, needs_grip, table_system)
 
 #: Steps per call of propagate_until (a call that does not advance the time means heyoka is stuck).
 STEP_CHUNK = 100_000
@@ -34,6 +34,9 @@ LEAVE_DOUBLINGS = 20
 MAX_PATH_PIECES = 200_000
 #: Newton steps at most putting a settling ball's centre onto the curve of its cushion.
 PROJECTION_STEPS = 8
+#: The slip (relative to the scene's top speed) with which a rolling rider that lost its grip starts to skid
+#: (:meth:`_Run.grip_lost`): the motion's error is ~SKID_ONSET^1.5, its cost ~SKID_ONSET^-0.5 steps.
+SKID_ONSET = 2.0**-26
 
 
 def simulate_table(scene: TableScene, opts: RunOptions, sink=None, progress=None) -> TableResult:
@@ -97,6 +100,13 @@ class _Run:
         #: balls riding the cushion (system module docstring): their wall event is off, the cushion's
         #: normal force keeps them on its curve
         self.riding = [False] * scene.n_bodies
+        #: under the slide cushion model a rolling rider needs the cloth's friction to turn its spin (system)
+        self.needs_grip = [needs_grip(scene, k) for k in range(scene.n_bodies)]
+        #: the instant each ball last lifted off its cushion (it is not settled again at that instant)
+        self.lifted: dict = {}
+        #: rolling riders past their grip, by ball: the instant their slip reaches SKID_ONSET (:meth:`grip_lost`)
+        self.onsets: dict = {}
+        self.skid_onset = num(SKID_ONSET * float(self.geometry.size) / self.system.max_step)
         self.status, self.message = None, ""
         self.fired = None
         self.resolved: list = []
@@ -125,10 +135,20 @@ class _Run:
         n_events = len(self.system.events)
         while self.status is None:
             before = ta.time
-            propagated = ta.propagate_until(self.t_end, max_steps=STEP_CHUNK, max_delta_t=self.max_step)
+            until = min([self.t_end, *self.onsets.values()])
+            propagated = ta.propagate_until(until, max_steps=STEP_CHUNK, max_delta_t=self.max_step)
             outcome = propagated[0]
             self.steps += int(propagated[3])
             self.t = ta.time
+            if outcome == time_limit and until < self.t_end:  # a rider that lost its grip skids from now
+                self.pull()
+                for k in [k for k, t in self.onsets.items() if t <= self.t]:
+                    del self.onsets[k]
+                    self.start_skid(k, self.skid_onset)
+                self.at_instant(None)
+                if self.status is None:
+                    self.push()
+                continue
             if outcome == time_limit:
                 self.pull()
                 self.stop(Status.COMPLETED, "reached t_end")
@@ -145,8 +165,9 @@ class _Run:
                 break
             self.pull()
             event = self.system.events[index]
-            if event.kind == "roll":
-                self.reroll(event.ball)
+            if event.kind in ("roll", "lift", "grip"):
+                # a slip ends, a skidding ball lifts off its cushion, a rolling rider starts to skid
+                {"roll": self.reroll, "lift": self.lift, "grip": self.grip_lost}[event.kind](event.ball)
                 # the accelerations changed: a pair or cushion touching now may start to close
                 self.at_instant(None)
             else:
@@ -193,32 +214,48 @@ class _Run:
 
     # -- modes ---------------------------------------------------------------------------------
     def set_mode(self, k: int) -> None:
-        """Ball k's accelerations from its slip: sliding against d = u/|u| (module system), or none."""
+        """Ball k's mode parameters from its slip and riding (module system). Free: it slides against
+        d = u/|u| or rolls. Riding: it skids (slides along the cushion, its friction's direction turning with
+        the slip) or rolls on the cushion at the speed it has now, held, its grip watched where the cushion
+        model needs it."""
         b, s = BALL_PARS * k, STATE_PER_BALL * k
         ux, uy = self.state[s + 4], self.state[s + 5]
         zero = self.zero
-        if self.system.rolls[k] and (ux != zero or uy != zero):
+        mode = [zero] * MODE_PARS
+        sliding = ux != zero or uy != zero
+        if self.riding[k] and sliding and ux * ux + uy * uy <= self.pars[self.system.slip_end] ** 2:
+            # a rider's slip at or below SLIP_END has ended (the settle's round-off normal speed moved into
+            # it under the slide model, ~1e-17): skidding from there would take steps of its size
+            self.state[s + 4] = self.state[s + 5] = zero
+            sliding = False
+        if self.riding[k]:
+            mode[RIDING] = zero + 1
+            if sliding:
+                mode[SKID] = zero + 1
+            else:
+                vx, vy = self.state[s + 2], self.state[s + 3]
+                speed2 = vx * vx + vy * vy
+                mode[RIDE_SPEED2] = speed2
+                mode[RIDE_HOLD] = self.pars[self.system.alpha] / (2 * speed2) if speed2 > zero else zero
+                if self.system.grips[k] and k not in self.onsets:
+                    mode[GRIP] = zero + 1
+        elif self.system.rolls[k] and sliding:
             norm = sqrt(ux * ux + uy * uy)
             dx, dy = ux / norm, uy / norm
-            self.pars[b:b + RIDING] = [-self.slide_v[k] * dx, -self.slide_v[k] * dy, -self.slide_u[k] * dx,
-                                       -self.slide_u[k] * dy, zero + 1, dx, dy]
+            mode[FVX:RIDING] = [-self.slide_v[k] * dx, -self.slide_v[k] * dy, -self.slide_u[k] * dx,
+                                -self.slide_u[k] * dy, zero + 1, dx, dy]
             self.slip_scale[k] = norm
-        else:
-            self.pars[b:b + RIDING] = [zero] * RIDING
-        self.pars[b + RIDING:b + BALL_PARS] = [zero] * (BALL_PARS - RIDING)
-        if self.riding[k]:  # the speed it rides at, held (system module docstring)
-            vx, vy = self.state[s + 2], self.state[s + 3]
-            speed2 = vx * vx + vy * vy
-            hold = self.pars[self.system.alpha] / (2 * speed2) if speed2 > zero else zero
-            self.pars[b + RIDING:b + BALL_PARS] = [zero + 1, speed2, hold]
+        self.pars[b:b + MODE_PARS] = mode
 
     def reroll(self, k: int) -> None:
-        """Ball k's slip reached zero: it rolls from now on; so does every ball whose slip ends now too
-        (heyoka does not see a root at the very start of its next step)."""
+        """Ball k's slip reached zero (a skidding rider's, SLIP_END): it rolls from now on; so does every
+        free ball whose slip ends now too (heyoka does not see a root at the very start of its next step). A
+        rider that cannot grip the cloth skids again at once (:meth:`grip_or_skid`)."""
         s = STATE_PER_BALL * k
         self.state[s + 4] = self.state[s + 5] = self.zero
         self.set_mode(k)
         self.rerolls += 1
+        self.grip_or_skid(k)
         for other in range(self.scene.n_bodies):
             b, s = BALL_PARS * other, STATE_PER_BALL * other
             if other == k or self.pars[b + SLIDING] == self.zero:
@@ -228,6 +265,58 @@ class _Run:
                 self.state[s + 4] = self.state[s + 5] = self.zero
                 self.set_mode(other)
                 self.rerolls += 1
+
+    def grip_or_skid(self, k: int) -> None:
+        """A rider rolling under the ``slide`` cushion model keeps rolling while the cloth's friction can turn
+        its spin with it, (kappa - 1) |v'| <= mu g (system module docstring); otherwise it skids from now."""
+        if not self.riding[k] or self.slides(k) or not self.needs_grip[k] or k in self.onsets:
+            return
+        if self._grip_excess(k) > 0:
+            self.start_skid(k, 2 * self.pars[self.system.slip_end])
+
+    def _grip_excess(self, k: int, shift: float = 0.0) -> float:
+        """(kappa - 1) |v'| - mu g of rolling rider k (float), its position moved by ``shift`` along v."""
+        b, s = BALL_PARS * k, STATE_PER_BALL * k
+        gx, gy, curvature = self._gap_terms(k, shift)
+        return float(self.pars[b + SPIN]) * curvature / math.hypot(gx, gy) - float(self.pars[b + MU_G])
+
+    def grip_lost(self, k: int) -> None:
+        """The grip event of rolling rider k: from now the cloth's friction cannot turn its spin with it.
+
+        The slip grows from 0 as s' = e/(kappa - 1) (e = (kappa - 1)|v'| - mu g, 0 now, growing at e'),
+        s = e' t^2 / (2 (kappa - 1)), in the direction of the table's inside (where the saturated friction
+        drives it; a slip's direction turns toward it at a rate nu/|u|, nu the cushion's push per unit mass).
+        Integrated from a slip of 2 SLIP_END that rate makes steps of ~1e-13 s (measured: 9e5 steps for one
+        onset). So the ball rolls on, as the motion does to O(s), until its slip reaches SKID_ONSET, at
+        t* = sqrt(2 (kappa - 1) SKID_ONSET / e'), and skids from there with that slip: an error of
+        ~SKID_ONSET t* in its speed, ~1e-12 relative, for ~1e4 steps."""
+        s = STATE_PER_BALL * k
+        speed = math.hypot(float(self.state[s + 2]), float(self.state[s + 3]))
+        h = 1e-6 * float(self.geometry.size)
+        rate = speed * (self._grip_excess(k, h) - self._grip_excess(k, -h)) / (2 * h)
+        if not rate > 0:
+            self.start_skid(k, 2 * self.pars[self.system.slip_end])
+            return
+        wait = math.sqrt(2 * float(self.pars[BALL_PARS * k + SPIN]) * float(self.skid_onset) / rate)
+        self.onsets[k] = self.t + self.num(wait)
+        self.pars[BALL_PARS * k + GRIP] = self.zero
+
+    def start_skid(self, k: int, slip) -> None:
+        """Rolling rider k starts to skid with a slip of size ``slip`` toward the table's inside, where the
+        saturated friction drives it (system module docstring; :meth:`grip_lost`)."""
+        s = STATE_PER_BALL * k
+        _, c = self.system.walls[(k, 0)]
+        gx, gy = self.scene.boundary.gradient(0, self.state[s], self.state[s + 1], c)
+        norm = sqrt(gx * gx + gy * gy)
+        self.state[s + 4], self.state[s + 5] = -slip * gx / norm, -slip * gy / norm
+        self.set_mode(k)
+
+    def lift(self, k: int) -> None:
+        """Skidding rider k lifts off its cushion (the cushion's normal force fell to zero): friction draws it
+        into the table faster than the curve turns it. It slides freely from now, its wall event on again."""
+        self.riding[k] = False
+        self.lifted[k] = self.t
+        self.set_mode(k)
 
     # -- impacts ---------------------------------------------------------------------------------
     def fired_contact(self, event) -> Contact | None:
@@ -370,10 +459,6 @@ class _Run:
                 self.check_cushion_contact(c)
             elif self.riding[c.i] or self.riding[c.j]:
                 self.check_pressed_pair(c)
-        for k, on in enumerate(self.riding):  # wherever round-off has put it
-            if on and self.slides(k):
-                self.stop(Status.FAILED, f"ball {k + 1} slides on the cloth along the curved cushion at "
-                                         f"t = {float(self.t):.17g} s: sliding along a cushion is not modelled")
         # every touching contact but the one that fired (it has its cooldown, system.TableSystem.cooldown)
         # is opened past round-off, resolved now or not: one whose gap starts a step at zero would
         # close unseen if the motion turns it (a re-roll, friction)
@@ -412,6 +497,7 @@ class _Run:
         else:
             flag = self.resolver.pair(self.state, contact.i, contact.j, contact.normal)
         for k in (contact.i,) if contact.kind == "wall" else (contact.i, contact.j):
+            self.onsets.pop(k, None)  # its velocity changed: its grip is judged again (grip_or_skid)
             self.set_mode(k)
         self.record(contact, before, self.state, energy_before, self.energy(self.state), flag)
         self.resolved.append(contact)
@@ -456,18 +542,19 @@ class _Run:
             step = step * 2
 
     def check_cushion_contact(self, contact: Contact) -> None:
-        """A ball that stays on a cushion in a way the engine does not follow: the run stops, saying why.
+        """A ball that stays on a cushion: settled where it can ride it; else the run stops, saying why.
 
         * Grazing a curved cushion: after an impact at normal speed v_n along a cushion of radius of
           curvature rho the ball's chord dips into the table by about v_n^2 rho / (2 v^2) before the
           next impact; below the contact resolution the impacts can no longer be told apart. With
           k < 1 they accumulate (v_n shrinks by k each time, in a finite time): the ball settles onto
-          the cushion and rolls along it pressed against it (:meth:`settle_riders`, :meth:`ride`). A
-          ball started touching a curved cushion and moving along it is the same case. Where riding is
-          not compiled (k = 1, the slide cushion model) or the ball slides on the cloth (riding or
-          about to), the run stops: not modelled.
-        * Pressed against a straight cushion: no normal speed left (k = 0) while sliding friction drives
-          the ball into the cushion.
+          the cushion and rolls or skids along it pressed against it (:meth:`settle_riders`,
+          :meth:`ride`). A ball started touching a curved cushion and moving along it is the same case.
+          A sliding ball that friction draws into the table leaves it. Where riding is not compiled
+          (k = 1) the run stops: not modelled.
+        * Pressed against a cushion: no normal speed left (k = 0), or bounces too low to resolve, while
+          sliding friction drives the ball into the cushion. On a curved cushion that can be ridden it is their
+          limit: the ball settles and skids along it; on a straight one (no riding compiled) the run stops.
         """
         k = contact.i
         s, b = STATE_PER_BALL * k, BALL_PARS * k
@@ -477,17 +564,21 @@ class _Run:
         speed2 = vx * vx + vy * vy
         grazing = self.grazing is not None and vn * vn < self.grazing * speed2
         if self.riding[k]:
-            return  # at_instant stops a riding ball that slides
+            return
         if grazing and speed2 > self.zero:
-            why = ("the ball slides on the cloth, and sliding along a cushion is not modelled"
-                   if self.system.ride else "impacts accumulate: the ball settles onto the cushion; riding it is "
-                   "modelled only for k < 1")
+            if self.lifted.get(k) == self.t or not self.pressed_on(k):
+                return  # friction draws it into the table: it leaves the cushion
+            why = ("it did not settle onto the cushion" if self.system.ride else
+                   "impacts accumulate: the ball settles onto the cushion; riding it is modelled only for k < 1")
             self.stop(Status.FAILED, f"ball {k + 1} moves along the curved cushion at t = {float(self.t):.17g} s with a "
                                      f"normal speed {float(vn / sqrt(speed2)):.3g} of its speed, too slow to resolve its "
                                      f"next impact ({why})")
             return
         push = self.pars[b + FVX] * nx + self.pars[b + FVY] * ny
         if push > self.zero and (not vn * vn > self.grazing_straight * speed2 or self.pressed(k, vn, speed2, push)):
+            if self.system.ride:  # the limit of its bounces: it skids along the (curved) cushion, pressed on
+                self.ride(k, record=True)
+                return
             self.stop(Status.FAILED, f"ball {k + 1} is pressed against the cushion at t = {float(self.t):.17g} s (no "
                                      "normal speed left, sliding friction driving it into the cushion): sliding along "
                                      "a cushion is not modelled")
@@ -530,7 +621,8 @@ class _Run:
         removed (the limit of its accumulating impacts again: a row, law_flag SETTLED, where an impact at
         this instant gave it that speed), and one sent into the table faster leaves the cushion (its wall
         event is on again). Faster into the cushion it is an impact (``closing``). A sliding ball is left
-        to check_cushion_contact (not modelled). True: a ball's velocity or riding changed."""
+        only while it is pressed on (a sliding ball whose friction draws it into the table leaves; so does one
+        that has just lifted off). True: a ball's velocity or riding changed."""
         changed = False
         walls = [c for c in near if c.kind == "wall"]
         held = {c.i for c in walls}
@@ -547,11 +639,9 @@ class _Run:
             speed2 = vx * vx + vy * vy
             grazing = into * into < self.grazing * speed2
             if not self.riding[k]:
-                if grazing and speed2 > self.zero and not self.slides(k):
+                if grazing and speed2 > self.zero and self.lifted.get(k) != self.t and self.pressed_on(k):
                     self.ride(k, record=True)
                     changed = True
-            elif self.slides(k):
-                continue  # an impact made it slide: check_cushion_contact stops the run (not modelled)
             elif grazing:
                 if into != self.zero:  # more than round-off: an impact at this instant gave it that speed
                     moved = abs(into) > self.round_off * sqrt(speed2) and any(
@@ -564,29 +654,48 @@ class _Run:
                 changed = True
         return changed
 
-    def skids(self, k: int) -> bool:
-        """Under the ``slide`` cushion model (a physical cushion: its force through the centre, no torque) a
-        ball rolls along the curved cushion only while the cloth's friction can turn its spin with it:
-        m (kappa - 1)/kappa v^2 / rho <= mu m g, rho the least radius of curvature of its centre's curve
-        (its speed is constant on the ride, and it goes round the whole curve). Otherwise the run stops:
-        the ball would skid, sliding along a cushion is not modelled. (The ``rolling`` model keeps rolling
-        by its definition, paper section 7.2.) True: stopped."""
-        body = self.scene.balls[k].body
-        if self.scene.cushion.keeps_rolling or body.is_particle or body.kappa == 1:
-            return False
+    def pressed_on(self, k: int) -> bool:
+        """Ball k, touching its curved cushion with no normal speed, is pressed on: the second derivative of
+        its gap, v^T H v + grad g . a (a its acceleration without the cushion), is > 0. A rolling ball on a
+        convex cushion always is; friction can draw a sliding ball off."""
+        gx, gy, curvature = self._gap_terms(k)
+        ax, ay = self._free_acceleration(k)
+        return curvature + gx * ax + gy * ay > 0
+
+    def _gap_terms(self, k: int, shift: float = 0.0) -> tuple:
+        """(dg/dx, dg/dy, v^T H v) of ball k's wall-0 gap (float; the Hessian along v by central differences
+        of the gradient: for a decision, not the motion), its position moved by ``shift`` along v (v then
+        turned to stay normal to the gradient, as on a ride)."""
         s = STATE_PER_BALL * k
-        vx, vy = float(self.state[s + 2]), float(self.state[s + 3])
-        rho = self.scene.boundary.least_curvature_radius(body.radius)
-        kappa = float(body.kappa)
-        needed = (kappa - 1) / kappa * (vx * vx + vy * vy) / rho
-        available = float(self.scene.friction * self.scene.g)
-        if needed <= available:
-            return False
-        self.stop(Status.FAILED, f"ball {k + 1} settles onto the curved cushion at t = {float(self.t):.17g} s but would "
-                                 f"skid along it: keeping it rolling on the tightest bend needs (kappa - 1)/kappa v^2/rho "
-                                 f"= {needed:.3g} m/s^2 of the cloth's friction, mu g = {available:.3g} (cushion model "
-                                 "slide); sliding along a cushion is not modelled")
-        return True
+        _, c = self.system.walls[(k, 0)]
+        c = [float(v) for v in c]
+        gradient = self.scene.boundary.gradient
+        x, y, vx, vy = (float(v) for v in self.state[s:s + 4])
+        speed = math.hypot(vx, vy)
+        if speed == 0:
+            return (*gradient(0, x, y, c), 0.0)
+        ux, uy = vx / speed, vy / speed
+        if shift:
+            x, y = x + shift * ux, y + shift * uy
+            gx, gy = gradient(0, x, y, c)
+            norm = math.hypot(gx, gy)
+            turn = 1.0 if gx * uy - gy * ux >= 0 else -1.0  # the side of the normal v is on
+            ux, uy = -turn * gy / norm, turn * gx / norm
+        gx, gy = gradient(0, x, y, c)
+        h = 1e-6 * float(self.geometry.size)
+        fx, fy = gradient(0, x + h * ux, y + h * uy, c)
+        bx, by = gradient(0, x - h * ux, y - h * uy, c)
+        return gx, gy, speed * speed * (ux * (fx - bx) + uy * (fy - by)) / (2 * h)
+
+    def _free_acceleration(self, k: int) -> tuple:
+        """Ball k's acceleration without its cushion (float): its free sliding one, or, skidding, the cloth's
+        friction against its slip now."""
+        b, s = BALL_PARS * k, STATE_PER_BALL * k
+        if self.pars[b + SKID] == self.zero:
+            return float(self.pars[b + FVX]), float(self.pars[b + FVY])
+        ux, uy = float(self.state[s + 4]), float(self.state[s + 5])
+        norm, mu_g = math.hypot(ux, uy), float(self.pars[b + MU_G])
+        return (-mu_g * ux / norm, -mu_g * uy / norm) if norm > 0 else (0.0, 0.0)
 
     def check_pressed_pair(self, contact: Contact) -> None:
         """Stop where a riding ball and a ball touching it stay pressed together: a contact mode that is not
@@ -611,26 +720,13 @@ class _Run:
                                      "balls in persistent contact are not modelled")
 
     def _present_acceleration(self, k: int) -> tuple:
-        """Ball k's acceleration now (float): its sliding one, or, riding, the cushion's -lambda grad g (the
-        Hessian of g along v by central differences of its gradient: for a decision, not the motion)."""
-        b, s = BALL_PARS * k, STATE_PER_BALL * k
-        ax, ay = float(self.pars[b + FVX]), float(self.pars[b + FVY])
+        """Ball k's acceleration now (float): its free one (:meth:`_free_acceleration`) and, riding, the
+        cushion's -lambda grad g."""
+        ax, ay = self._free_acceleration(k)
         if not self.riding[k]:
             return ax, ay
-        _, c = self.system.walls[(k, 0)]
-        c = [float(v) for v in c]
-        gradient = self.scene.boundary.gradient
-        x, y, vx, vy = (float(v) for v in self.state[s:s + 4])
-        speed = math.hypot(vx, vy)
-        if speed == 0:
-            return ax, ay
-        h = 1e-6 * float(self.geometry.size)
-        ux, uy = vx / speed, vy / speed
-        fx, fy = gradient(0, x + h * ux, y + h * uy, c)
-        bx, by = gradient(0, x - h * ux, y - h * uy, c)
-        gx, gy = gradient(0, x, y, c)
-        curvature = speed * speed * (ux * (fx - bx) + uy * (fy - by)) / (2 * h)
-        lam = curvature / (gx * gx + gy * gy)
+        gx, gy, curvature = self._gap_terms(k)
+        lam = (curvature + gx * ax + gy * ay) / (gx * gx + gy * gy)
         return ax - lam * gx, ay - lam * gy
 
     def ride(self, k: int, record: bool) -> None:
@@ -638,12 +734,11 @@ class _Run:
 
         The limit of the accumulating impacts (k < 1): the centre put onto the cushion's curve g = 0
         (Newton's method along grad g), the normal part of its velocity removed, the tangential part
-        kept, rolling kept (the slip stays 0). With ``record`` it is one row of the impact table,
+        kept; rolling kept under the ``rolling`` model (the slip unchanged), the spin kept under ``slide``
+        (the slip changed as v). With ``record`` it is one row of the impact table,
         law_flag SETTLED, whose energy change is what the rest of the accumulation would dissipate.
         """
         s = STATE_PER_BALL * k
-        if self.skids(k):
-            return
         before = list(self.state)
         energy_before = self.energy(before)
         _, c = self.system.walls[(k, 0)]
@@ -662,11 +757,16 @@ class _Run:
         vx, vy = self.state[s + 2], self.state[s + 3]
         vn = vx * nx + vy * ny
         self.state[s:s + 4] = [x, y, vx - vn * nx, vy - vn * ny]
+        if self.needs_grip[k]:
+            # the slide model's cushion pushes through the centre: the spin is kept, the slip takes the change
+            # of v (energy then falls by 1/2 m v_n^2; keeping the slip instead turned the spin and made energy)
+            self.state[s + 4], self.state[s + 5] = self.state[s + 4] - vn * nx, self.state[s + 5] - vn * ny
         self.riding[k] = True
         self.set_mode(k)
         if record:
             self.record(Contact("wall", k, 0, (nx, ny), self.zero), before, self.state, energy_before,
                         self.energy(self.state), SETTLED)
+        self.grip_or_skid(k)
 
     def simultaneous(self, contacts: list) -> None:
         before = list(self.state)
@@ -679,6 +779,7 @@ class _Run:
             return
         balls = {c.i for c in contacts} | {c.j for c in contacts if c.kind == "pair"}
         for k in balls:
+            self.onsets.pop(k, None)
             self.set_mode(k)
         energy_after = self.energy(self.state)
         for c, lam in zip(contacts, impulses):

@@ -40,13 +40,41 @@ ellipse, a fixed pattern along the curve, otherwise drifted the speed by
 ~1e-12 over 400 laps (measured, validation/billiards.py). The normal force,
 kappa m v^2/rho_c on a ball rolling
 on a curve of radius of curvature rho_c, never changes sign on a convex
-table: a riding ball leaves the cushion only when an impact sends it off.
+table: a rolling rider leaves the cushion only when an impact sends it off.
+
+Skidding along the cushion (a riding ball that slides on the cloth, flag
+SKID). The cushion's force goes through the centre (it turns v, not the
+spin), the cloth's friction -mu m g u/|u| acts against the slip, whose
+direction now turns with the motion (on a free ball it is constant):
+
+    v' = f - lambda grad g,    u' = kappa/(kappa - 1) f - lambda grad g,    f = -mu g u/|u|
+
+with lambda as above plus grad g . f in its numerator (the friction's push
+into the cushion). No speed is held (friction changes it). Three events:
+
+* "roll": |u| falls to SLIP_END (2^10 ulps of the scene's top speed); the
+  slip then ends (the driver sets u = 0). Not at |u| = 0 itself: there
+  the friction's direction is discontinuous, |u| has a corner, not a
+  crossing, and the slip's direction behaves like (t0 - t)^gamma, a
+  branch point that Taylor steps approach geometrically;
+* "lift": the normal force's numerator v^T H v + grad g . f falls through
+  0: friction pulls the ball off the cushion faster than its curve turns
+  it (a free sliding ball from then on);
+* "grip" (``slide`` cushion model, a rolling rider): rolling along the
+  curve turns the spin, which needs the cloth's friction
+  (kappa - 1) m |v'| = (kappa - 1) m v^T H v/|grad g| (|v'| = v^2/rho_c);
+  when that exceeds mu m g the ball starts to skid (the driver seeds a slip
+  of 2 SLIP_END toward the table's inside, the direction the saturated
+  friction drives it). The ``rolling`` cushion model keeps a rolling ball
+  rolling by its definition (paper section 7.2).
 
 Events (terminal; the driver resolves them): one per ball and wall (the
 boundary's gap polynomial crossing 0 upwards; the constant -1 while the
 ball rides that cushion), one per pair of balls
 (|c_i - c_j|^2 - (R_i + R_j)^2 crossing 0 downwards), one per ball that can
-slide (u . d + (1 - s), the constant 1 while it rolls).
+slide (u . d + (1 - s), the constant 1 while it rolls; |u| - SLIP_END while it
+skids), and, where balls can ride, a "lift" and a "grip" event per ball
+(each a constant while not armed).
 """
 
 from __future__ import annotations
@@ -62,11 +90,17 @@ from ...model.table import TableScene
 from ..compiled_cache import CompiledCache
 from ..precision import Precision
 
-#: Parameters per ball: accelerations of v and of u, sliding flag s, slip direction d, riding flag r, and
-#: while riding the square of the speed V^2 and the rate c = alpha / (2 V^2) that holds it (0 at rest).
-FVX, FVY, FUX, FUY, SLIDING, DX, DY, RIDING, RIDE_SPEED2, RIDE_HOLD = range(10)
-BALL_PARS = 10
+#: Parameters per ball: accelerations of v and of u, sliding flag s, slip direction d, riding flag r, while
+#: rolling on the cushion the square of the speed V^2 and the rate c = alpha / (2 V^2) that holds it (0 at
+#: rest), the skid flag (riding and sliding) and the armed grip event (the first MODE_PARS, set by the driver
+#: per mode); then the ball's constants: mu g, mu g kappa/(kappa - 1) and kappa - 1 (module docstring).
+FVX, FVY, FUX, FUY, SLIDING, DX, DY, RIDING, RIDE_SPEED2, RIDE_HOLD, SKID, GRIP, MU_G, MU_G_U, SPIN = range(15)
+MODE_PARS = 12
+BALL_PARS = 15
 STATE_PER_BALL = 6
+#: Added to |u|^2 under the square root of a skid's friction direction: u = 0 (a frictionless skid, a rider
+#: that rolls) never divides 0 by 0; 2^-1000 is far below any slip the run resolves (SLIP_END^2 ~ 1e-26).
+TINY = 2.0**-1000
 
 _INTEGRATORS = CompiledCache(16)
 #: Events beyond which the integrator is compiled in heyoka's compact mode: measured with 16 balls in a
@@ -79,7 +113,8 @@ COMPACT_EVENTS = 150
 
 @dataclass(frozen=True)
 class TableEvent:
-    """What an event index means: ``kind`` wall | pair | roll; ``ball`` (0-based); ``other`` wall or ball."""
+    """What an event index means: ``kind`` wall | pair | roll | lift | grip; ``ball`` (0-based); ``other`` wall
+    or ball."""
 
     kind: str
     ball: int
@@ -108,6 +143,9 @@ class TableSystem:
     #: parameter index of Baumgarte's alpha (or -1)
     ride: bool = False
     alpha: int = -1
+    #: parameter index of the slip at which a skid ends (or -1); per ball, the grip event is compiled
+    slip_end: int = -1
+    grips: tuple = ()
 
     @property
     def n_balls(self) -> int:
@@ -117,6 +155,13 @@ class TableSystem:
 def can_slide(scene: TableScene, k: int) -> bool:
     body = scene.balls[k].body
     return scene.slides and scene.friction > 0 and not body.is_particle and body.kappa > 1
+
+
+def needs_grip(scene: TableScene, k: int) -> bool:
+    """Under the ``slide`` cushion model a rolling rider's spin turns only by the cloth's friction: a ball with
+    spin inertia (kappa > 1) may skid (module docstring)."""
+    body = scene.balls[k].body
+    return not scene.cushion.keeps_rolling and not body.is_particle and body.kappa > 1
 
 
 def can_ride(scene: TableScene) -> bool:
@@ -130,7 +175,12 @@ def table_system(scene: TableScene, precision: Precision) -> TableSystem:
     n = scene.n_bodies
     pars: list = []
     for ball in scene.balls:
-        pars += [num(0)] * BALL_PARS
+        with workprec():  # the constants at the model's precision, rounded once to the run's type
+            kappa = ball.body.kappa
+            mu_g = scene.friction * scene.g
+            mu_g_u = mu_g * kappa / (kappa - 1) if kappa > 1 else 0 * mu_g
+            constants = [num(mu_g), num(mu_g_u), num(kappa - 1)]
+        pars += [num(0)] * MODE_PARS + constants
     walls = {}
     lengths = []
     for k, ball in enumerate(scene.balls):
@@ -154,13 +204,19 @@ def table_system(scene: TableScene, precision: Precision) -> TableSystem:
     crossing = _crossing_time(scene)
     cooldown = 2.0 ** round(math.log2(2.0**12 * precision.epsilon * crossing))
     ride = can_ride(scene)
-    alpha = -1
+    alpha = slip_end = -1
+    grips = ()
     if ride:
+        slip_end = len(pars)  # before alpha, which every riding system uses last (heyoka counts them)
+        pars.append(num(2.0**10 * precision.epsilon * _extent_size(scene) / crossing))
         alpha = len(pars)
         pars.append(num(1 / crossing))
-    shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown, ride)
+        events += [TableEvent("lift", k) for k in range(n) if rolls[k]]
+        grips = tuple(rolls[k] and needs_grip(scene, k) for k in range(n))
+        events += [TableEvent("grip", k) for k in range(n) if grips[k]]
+    shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown, ride, grips)
     return TableSystem(events=tuple(events), walls=walls, pairs=pairs, pars=tuple(pars), rolls=rolls, shape=shape,
-                       cooldown=cooldown, max_step=crossing, ride=ride, alpha=alpha)
+                       cooldown=cooldown, max_step=crossing, ride=ride, alpha=alpha, slip_end=slip_end, grips=grips)
 
 
 def _crossing_time(scene: TableScene) -> float:
@@ -170,8 +226,12 @@ def _crossing_time(scene: TableScene) -> float:
     energy = float(scene.energy())
     lightest = min(float(b.body.mass) for b in scene.balls)
     top_speed = math.sqrt(2 * energy / lightest) if energy > 0 else 0.0
-    size = max(abs(float(v)) for v in _extent(scene.boundary))
+    size = _extent_size(scene)
     return size / top_speed if top_speed > 0 else 1.0
+
+
+def _extent_size(scene: TableScene) -> float:
+    return max(abs(float(v)) for v in _extent(scene.boundary))
 
 
 def _extent(boundary):
@@ -206,14 +266,17 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
         var = [var]
     par = hy.par
     equations = []
+    cushion = {}  # ball -> its cushion terms (riding systems)
     for k in range(n):
         x, y, vx, vy, ux, uy = var[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
         base = BALL_PARS * k
         ax, ay = par[base + FVX], par[base + FVY]
+        bx, by = par[base + FUX], par[base + FUY]
         if system.ride:
-            cx, cy = _riding_acceleration(scene, system, k, (x, y, vx, vy))
-            ax, ay = ax + cx, ay + cy
-        equations += [(x, vx), (y, vy), (vx, ax), (vy, ay), (ux, par[base + FUX]), (uy, par[base + FUY])]
+            terms = cushion[k] = _cushion_terms(scene, system, k, (x, y, vx, vy, ux, uy))
+            ax, ay = ax + terms.ax, ay + terms.ay
+            bx, by = bx + terms.bx, by + terms.by
+        equations += [(x, vx), (y, vy), (vx, ax), (vy, ay), (ux, bx), (uy, by)]
     positive, negative = hy.event_direction.positive, hy.event_direction.negative
     typed = {"fp_type": options["fp_type"]} if "fp_type" in options else {}
     # A fixed, tiny cooldown. After an impact the event that fired starts its next step at a root (to
@@ -238,23 +301,52 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
             index, _ = system.pairs[(k, ev.other)]
             dx, dy = x - xj, y - yj
             events.append(hy.t_event(dx * dx + dy * dy - par[index], direction=negative, **typed))
-        else:
+        elif ev.kind == "roll":
             ux, uy = var[STATE_PER_BALL * k + 4], var[STATE_PER_BALL * k + 5]
             base = BALL_PARS * k
-            events.append(hy.t_event(ux * par[base + DX] + uy * par[base + DY] + (1. - par[base + SLIDING]),
-                                     direction=negative, **typed))
+            along = ux * par[base + DX] + uy * par[base + DY] + (1. - par[base + SLIDING])
+            if system.ride:  # while it skids, the slip's size falling to SLIP_END
+                skid = par[base + SKID]
+                along = along * (1. - skid) + skid * (cushion[k].slip - par[system.slip_end])
+            events.append(hy.t_event(along, direction=negative, **typed))
+        elif ev.kind == "lift":
+            skid = par[BALL_PARS * k + SKID]
+            events.append(hy.t_event(skid * cushion[k].pressing + (1. - skid), direction=negative, **typed))
+        else:  # grip
+            base = BALL_PARS * k
+            armed, terms = par[base + GRIP], cushion[k]
+            spin, mu_g = par[base + SPIN], par[base + MU_G]
+            excess = spin * spin * terms.curvature * terms.curvature - mu_g * mu_g * terms.gradient2
+            events.append(hy.t_event(armed * excess - (1. - armed), direction=positive, **typed))
     big = len(events) > COMPACT_EVENTS or (system.ride and (n > 1 or any(len(v) > 2 for _, v in system.walls.values())))
     if big and "compact_mode" not in options:
         options = dict(options, compact_mode=True)
     return hy.taylor_adaptive(equations, list(state), pars=list(system.pars), t_events=events, **options)
 
 
-def _riding_acceleration(scene: TableScene, system: TableSystem, k: int, variables) -> tuple:
-    """The cushion's constraint acceleration -r lambda grad g on ball k (module docstring), as expressions.
+@dataclass(frozen=True)
+class _CushionTerms:
+    """Ball k's terms from its cushion (riding systems), as heyoka expressions: the accelerations added to
+    v' and u', the slip's size, v^T H v, the normal force's numerator v^T H v + grad g . f, |grad g|^2."""
+
+    ax: object
+    ay: object
+    bx: object
+    by: object
+    slip: object
+    curvature: object
+    pressing: object
+    gradient2: object
+
+
+def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables) -> _CushionTerms:
+    """The cushion's constraint acceleration -r lambda grad g on ball k and, while it skids, the cloth's
+    friction along the turning slip (module docstring).
 
     Where the ball does not ride (r = 0) the denominator is |grad g|^2 + 1, never 0 (grad g vanishes at the
-    centre of an ellipse), and the term is multiplied by 0."""
-    x, y, vx, vy = variables
+    centre of an ellipse), and the term is multiplied by 0; a ball that does not skid (flag 0) has the
+    friction term 0 and |u| under the square root offset by 1."""
+    x, y, vx, vy, ux, uy = variables
     par = hy.par
     first, values = system.walls[(k, 0)]
     c = [par[first + m] for m in range(len(values))]
@@ -262,9 +354,16 @@ def _riding_acceleration(scene: TableScene, system: TableSystem, k: int, variabl
     gx, gy = hy.diff(g, x), hy.diff(g, y)
     gxx, gxy, gyy = hy.diff(gx, x), hy.diff(gx, y), hy.diff(gy, y)
     base = BALL_PARS * k
-    riding, alpha = par[base + RIDING], par[system.alpha]
+    riding, alpha, skid = par[base + RIDING], par[system.alpha], par[base + SKID]
+    slip = hy.sqrt(ux * ux + uy * uy + (1. - skid) + TINY)
+    fx, fy = -skid * par[base + MU_G] * ux / slip, -skid * par[base + MU_G] * uy / slip
     curvature = vx * vx * gxx + 2. * vx * vy * gxy + vy * vy * gyy
-    lam = riding * (curvature + 2. * alpha * (gx * vx + gy * vy) + alpha * alpha * g) \
-        / (gx * gx + gy * gy + (1. - riding))
-    hold = par[base + RIDE_HOLD] * (par[base + RIDE_SPEED2] - vx * vx - vy * vy)  # 0 unless riding
-    return -lam * gx + hold * vx, -lam * gy + hold * vy
+    gradient2 = gx * gx + gy * gy
+    pressing = curvature + gx * fx + gy * fy
+    lam = riding * (pressing + 2. * alpha * (gx * vx + gy * vy) + alpha * alpha * g) / (gradient2 + (1. - riding))
+    hold = par[base + RIDE_HOLD] * (par[base + RIDE_SPEED2] - vx * vx - vy * vy)  # 0 unless rolling on it
+    cx, cy = -lam * gx, -lam * gy
+    rate = -skid * par[base + MU_G_U] / slip
+    return _CushionTerms(ax=fx + cx + hold * vx, ay=fy + cy + hold * vy, bx=rate * ux + skid * cx,
+                         by=rate * uy + skid * cy, slip=slip, curvature=curvature, pressing=pressing,
+                         gradient2=gradient2)
