@@ -4,7 +4,9 @@ The impacts on a convex cushion accumulate in a finite time when k < 1; in their
 along the cushion, pressed against it (heyroll.simulation.table.system). Checked here: the settle row and
 its energy; the ride against closed forms (a circle: uniform circular motion; a riding ball meeting a
 ball at rest) and against an independent mpmath reference (an ellipse: arc length along the inner
-parallel curve); a riding ball sent off by an impact; what stays refused or stops the run.
+parallel curve); a riding ball sent off by an impact; a ball skidding along the cushion (sliding on the
+cloth) against an independent polar-form reference (mpmath), its slip's end, its lift-off, the loss of its
+grip under the slide model; what stops the run.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from heyroll import SceneError, Status, simulate
+from heyroll import Status, simulate
 from heyroll.interfaces.table_figures import along_cushion, path_points
 from heyroll.reference.billiard import reference_ride
 

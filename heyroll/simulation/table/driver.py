@@ -35,7 +35,8 @@ MAX_PATH_PIECES = 200_000
 #: Newton steps at most putting a settling ball's centre onto the curve of its cushion.
 PROJECTION_STEPS = 8
 #: The slip (relative to the scene's top speed) with which a rolling rider that lost its grip starts to skid
-#: (:meth:`_Run.grip_lost`): the motion's error is ~SKID_ONSET^1.5, its cost ~SKID_ONSET^-0.5 steps.
+#: (:meth:`_Run.grip_lost`): the motion's error falls a little faster than SKID_ONSET (measured ~8e-12 m/s at
+#: 2^-26, validation/billiards.py section 6), its cost grows as SKID_ONSET^-0.5 (~1400 steps at 2^-26).
 SKID_ONSET = 2.0**-26
 
 
@@ -276,7 +277,7 @@ class _Run:
 
     def _grip_excess(self, k: int, shift: float = 0.0) -> float:
         """(kappa - 1) |v'| - mu g of rolling rider k (float), its position moved by ``shift`` along v."""
-        b, s = BALL_PARS * k, STATE_PER_BALL * k
+        b = BALL_PARS * k
         gx, gy, curvature = self._gap_terms(k, shift)
         return float(self.pars[b + SPIN]) * curvature / math.hypot(gx, gy) - float(self.pars[b + MU_G])
 
@@ -289,7 +290,8 @@ class _Run:
         Integrated from a slip of 2 SLIP_END that rate makes steps of ~1e-13 s (measured: 9e5 steps for one
         onset). So the ball rolls on, as the motion does to O(s), until its slip reaches SKID_ONSET, at
         t* = sqrt(2 (kappa - 1) SKID_ONSET / e'), and skids from there with that slip: an error of
-        ~SKID_ONSET t* in its speed, ~1e-12 relative, for ~1e4 steps."""
+        ~SKID_ONSET t* in its speed (estimated; measured 8e-12 m/s, validation/billiards.py section 6) for
+        ~1400 steps."""
         s = STATE_PER_BALL * k
         speed = math.hypot(float(self.state[s + 2]), float(self.state[s + 3]))
         h = 1e-6 * float(self.geometry.size)
