@@ -563,9 +563,19 @@ def test_second_review_regressions():
     rows = simulate(table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 1.0', [skid], law="newton",
                                 t_end=0.2)).collision_table()
     assert rows["energy_after"][0] == pytest.approx(rows["energy_before"][0], rel=1e-14)
+    # k = 0, slide model: its spin drives it into the wall; it skids along it (its slip ends at
+    # t = 0.9 + 0.4/(mu g) with no tangential friction), rolls into the corner, stops there, pressed on by a spin
+    # whose slip also ends (was: failed, "pressed against the cushion"; before the corner's ride, an overlap)
     pressed = simulate(table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 1.0', [ball("0", "0", "1", "0.3")],
                                    cushion="slide", cushion_k=0, t_end=10))
-    assert pressed.status is Status.FAILED and "pressed against the cushion" in pressed.message
+    assert pressed.status is Status.COMPLETED, pressed.message
+    assert pressed.state_final[2:] == [0.0] * 4 and pressed.energy_final == 0
+    assert pressed.state_final[:2] == pytest.approx([0.9, 0.4], abs=1e-12)  # in the corner (nudged off by ulps)
+    t_roll = next(p[0] for p in pressed.paths if p[0] > 0.9 and p[1][4:6] == [0.0, 0.0])
+    assert t_roll == pytest.approx(0.9 + 0.4 / (0.2 * 9.81), rel=1e-14)
+    from heyroll.interfaces.table_figures import path_points
+    riding = path_points(pressed)[0][1:]  # along the wall x = 0.9 to the corner, drawn as segments
+    assert all(np.allclose(x, 0.9, atol=1e-12) for x, _y, _s in riding) and riding[-1][1][-1] == pytest.approx(0.4)
     graze = simulate(table_scene(ELLIPSE, [ball("0", "0", "1", "0.3")], cushion_k="0.3", simultaneous="impulses",
                                  t_end=30))
     assert graze.status is Status.COMPLETED and graze.n_collisions < 100  # it settles and rides (was: failed)

@@ -37,17 +37,27 @@ def path_points(result, max_pieces: int = DRAWN_PIECES) -> list:
     """Per ball, a list of (x, y, sliding) polylines: one per piece of motion between events.
 
     A piece is (t, state, accelerations, riding balls): straight or parabolic, or, for a ball riding
-    the cushion, along the curve of its centre at its constant speed."""
+    the cushion, along the curve of its centre at its mean speed (constant rolling, falling while it skids),
+    on a straight wall from where it starts to where the next piece starts."""
     scene = result.scene
     n = scene.n_bodies
     pieces = result.paths[:max_pieces]
     ends = [p[0] for p in pieces[1:]] + [float(result.t_final)]
+    last = [float(v) for v in result.state_final]
+    following = [p[1] for p in pieces[1:]] + [last]
+    curved = hasattr(scene.boundary, "centre_curve")
     out = [[] for _ in range(n)]
-    for (t0, state, acc, riding), t1 in zip(pieces, ends):
+    for (t0, state, acc, riding), t1, after in zip(pieces, ends, following):
         for k in range(n):
             x, y, vx, vy = state[6 * k:6 * k + 4]
             if k in riding:
-                out[k].append((*along_cushion(scene, k, x, y, vx, vy, max(t1 - t0, 0)), False))
+                x1, y1, vx1, vy1 = after[6 * k:6 * k + 4]
+                if not curved:
+                    out[k].append((np.array([x, x1]), np.array([y, y1]), False))
+                    continue
+                mean = (np.hypot(vx, vy) + np.hypot(vx1, vy1)) / 2
+                scale = mean / np.hypot(vx, vy) if np.hypot(vx, vy) > 0 else 0.0
+                out[k].append((*along_cushion(scene, k, x, y, vx * scale, vy * scale, max(t1 - t0, 0)), False))
                 continue
             ax, ay = acc[2 * k], acc[2 * k + 1]
             sliding = ax != 0 or ay != 0

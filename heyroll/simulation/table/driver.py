@@ -92,6 +92,8 @@ class _Run:
             if hasattr(scene.boundary, "least_curvature_radius") else None
         self.grazing = None if curvature is None else num(2 * float(self.geometry.touch) / curvature)
         self.grazing_straight = num(2.0**10 * precision.epsilon) ** 2
+        #: (v_n / v)^2 below which a ball on a cushion that can be ridden settles onto it (settle_riders)
+        self.settle_limit = self.grazing if self.grazing is not None else self.grazing_straight
         self.t = num(0)
         self.count = self.cushion = self.rerolls = self.events = self.steps = 0
         self.records: list = []
@@ -101,6 +103,8 @@ class _Run:
         #: balls riding the cushion (system module docstring): their wall event is off, the cushion's
         #: normal force keeps them on its curve
         self.riding = [False] * scene.n_bodies
+        #: the wall each riding ball rides (0 on a curved cushion, its one wall)
+        self.ride_wall = [0] * scene.n_bodies
         #: under the slide cushion model a rolling rider needs the cloth's friction to turn its spin (system)
         self.needs_grip = [needs_grip(scene, k) for k in range(scene.n_bodies)]
         #: the instant each ball last lifted off its cushion (it is not settled again at that instant)
@@ -247,6 +251,10 @@ class _Run:
                                 -self.slide_u[k] * dy, zero + 1, dx, dy]
             self.slip_scale[k] = norm
         self.pars[b:b + MODE_PARS] = mode
+        if self.system.ride:
+            for w in range(self.scene.boundary.n_walls()):
+                on = self.riding[k] and w == self.ride_wall[k]
+                self.pars[self.system.ride_flags[(k, w)]] = zero + 1 if on else zero
 
     def reroll(self, k: int) -> None:
         """Ball k's slip reached zero (a skidding rider's, SLIP_END): it rolls from now on; so does every
@@ -306,9 +314,9 @@ class _Run:
     def start_skid(self, k: int, slip) -> None:
         """Rolling rider k starts to skid with a slip of size ``slip`` toward the table's inside, where the
         saturated friction drives it (system module docstring; :meth:`grip_lost`)."""
-        s = STATE_PER_BALL * k
-        _, c = self.system.walls[(k, 0)]
-        gx, gy = self.scene.boundary.gradient(0, self.state[s], self.state[s + 1], c)
+        s, w = STATE_PER_BALL * k, self.ride_wall[k]
+        _, c = self.system.walls[(k, w)]
+        gx, gy = self.scene.boundary.gradient(w, self.state[s], self.state[s + 1], c)
         norm = sqrt(gx * gx + gy * gy)
         self.state[s + 4], self.state[s + 5] = -slip * gx / norm, -slip * gy / norm
         self.set_mode(k)
@@ -422,7 +430,7 @@ class _Run:
                 if first is not None and first.kind == "pair":
                     hit.update((first.i, first.j))
                 touching = [c for c in near
-                            if not (c.kind == "wall" and self.riding[c.i]) or c.i in hit or self.closing(c)]
+                            if not self.rides(c) or c.i in hit or self.closing(c)]
                 if first is not None and not any(_same(first, c) for c in touching):
                     touching.append(first)
                 approaching = [c for c in touching if self.closing(c)]
@@ -479,8 +487,12 @@ class _Run:
         if contact.kind == "wall" and self.system.ride:  # below it the ball grazes: it settles (settle_riders)
             s = STATE_PER_BALL * contact.i
             vx, vy = self.state[s + 2], self.state[s + 3]
-            return speed * speed >= self.grazing * (vx * vx + vy * vy)
+            return speed * speed >= self.settle_limit * (vx * vx + vy * vy)
         return True
+
+    def rides(self, contact: Contact) -> bool:
+        """The contact is a ball's cushion wall that it rides."""
+        return contact.kind == "wall" and self.riding[contact.i] and contact.j == self.ride_wall[contact.i]
 
     def beyond_solver(self, contact: Contact) -> bool:
         """The contact approaches faster than a simultaneous solution's tolerance (2^20 ulps of the speeds)."""
@@ -518,7 +530,7 @@ class _Run:
         s = STATE_PER_BALL * contact.i
         nx, ny = contact.normal
         step = self.nudge
-        if contact.kind == "wall" and self.riding[contact.i]:
+        if self.rides(contact):
             return  # it stays on the cushion's curve; its event is off
         if contact.kind == "wall":
             _, c = self.system.walls[(contact.i, contact.j)]
@@ -555,20 +567,21 @@ class _Run:
           A sliding ball that friction draws into the table leaves it. Where riding is not compiled
           (k = 1) the run stops: not modelled.
         * Pressed against a cushion: no normal speed left (k = 0), or bounces too low to resolve, while
-          sliding friction drives the ball into the cushion. On a curved cushion that can be ridden it is their
-          limit: the ball settles and skids along it; on a straight one (no riding compiled) the run stops.
+          sliding friction drives the ball into the cushion. Where riding is compiled (k < 1) it is their
+          limit: the ball settles and skids along this wall (a ball riding another wall, in a corner, now rides
+          this one); otherwise (k = 1: its bounces do not shrink) the run stops.
         """
         k = contact.i
-        s, b = STATE_PER_BALL * k, BALL_PARS * k
+        s = STATE_PER_BALL * k
         vx, vy = self.state[s + 2], self.state[s + 3]
         nx, ny = contact.normal
         vn = -(vx * nx + vy * ny)  # into the table
         speed2 = vx * vx + vy * vy
         grazing = self.grazing is not None and vn * vn < self.grazing * speed2
-        if self.riding[k]:
+        if self.rides(contact):
             return
         if grazing and speed2 > self.zero:
-            if self.lifted.get(k) == self.t or not self.pressed_on(k):
+            if self.lifted.get(k) == self.t or not self.pressed_on(k, contact.j):
                 return  # friction draws it into the table: it leaves the cushion
             why = ("it did not settle onto the cushion" if self.system.ride else
                    "impacts accumulate: the ball settles onto the cushion; riding it is modelled only for k < 1")
@@ -576,10 +589,11 @@ class _Run:
                                      f"normal speed {float(vn / sqrt(speed2)):.3g} of its speed, too slow to resolve its "
                                      f"next impact ({why})")
             return
-        push = self.pars[b + FVX] * nx + self.pars[b + FVY] * ny
-        if push > self.zero and (not vn * vn > self.grazing_straight * speed2 or self.pressed(k, vn, speed2, push)):
-            if self.system.ride:  # the limit of its bounces: it skids along the (curved) cushion, pressed on
-                self.ride(k, record=True)
+        ax, ay = self._free_acceleration(k)  # sliding friction, also a skid's along another wall (a corner)
+        push = ax * float(nx) + ay * float(ny)
+        if push > 0 and (not vn * vn > self.grazing_straight * speed2 or self.pressed(k, vn, speed2, push)):
+            if self.system.ride:  # the limit of its bounces: it skids along this wall (a rider: now this one)
+                self.ride(k, record=True, wall=contact.j)
                 return
             self.stop(Status.FAILED, f"ball {k + 1} is pressed against the cushion at t = {float(self.t):.17g} s (no "
                                      "normal speed left, sliding friction driving it into the cushion): sliding along "
@@ -627,22 +641,24 @@ class _Run:
         that has just lifted off). True: a ball's velocity or riding changed."""
         changed = False
         walls = [c for c in near if c.kind == "wall"]
-        held = {c.i for c in walls}
+        held = {(c.i, c.j) for c in walls}
         for k, on in enumerate(self.riding):  # a riding ball is judged wherever round-off has put it
-            if on and k not in held:
-                s = STATE_PER_BALL * k
-                distance, normal = self.geometry.wall(k, 0, self.state[s], self.state[s + 1])
-                walls.append(Contact("wall", k, 0, normal, distance))
+            if on and (k, self.ride_wall[k]) not in held:
+                s, w = STATE_PER_BALL * k, self.ride_wall[k]
+                distance, normal = self.geometry.wall(k, w, self.state[s], self.state[s + 1])
+                walls.append(Contact("wall", k, w, normal, distance))
         for c in walls:
             k = c.i
+            if self.riding[k] and not self.rides(c):
+                continue  # another wall of a riding ball (a corner): an ordinary contact
             s = STATE_PER_BALL * k
             vx, vy = self.state[s + 2], self.state[s + 3]
             into = vx * c.normal[0] + vy * c.normal[1]
             speed2 = vx * vx + vy * vy
-            grazing = into * into < self.grazing * speed2
+            grazing = into * into < self.settle_limit * speed2
             if not self.riding[k]:
-                if grazing and speed2 > self.zero and self.lifted.get(k) != self.t and self.pressed_on(k):
-                    self.ride(k, record=True)
+                if grazing and speed2 > self.zero and self.lifted.get(k) != self.t and self.pressed_on(k, c.j):
+                    self.ride(k, record=True, wall=c.j)
                     changed = True
             elif grazing:
                 if into != self.zero:  # more than round-off: an impact at this instant gave it that speed
@@ -656,37 +672,39 @@ class _Run:
                 changed = True
         return changed
 
-    def pressed_on(self, k: int) -> bool:
+    def pressed_on(self, k: int, wall: int | None = None) -> bool:
         """Ball k, touching its curved cushion with no normal speed, is pressed on: the second derivative of
         its gap, v^T H v + grad g . a (a its acceleration without the cushion), is > 0. A rolling ball on a
         convex cushion always is; friction can draw a sliding ball off."""
-        gx, gy, curvature = self._gap_terms(k)
+        gx, gy, curvature = self._gap_terms(k, wall=wall)
         ax, ay = self._free_acceleration(k)
         return curvature + gx * ax + gy * ay > 0
 
-    def _gap_terms(self, k: int, shift: float = 0.0) -> tuple:
-        """(dg/dx, dg/dy, v^T H v) of ball k's wall-0 gap (float; the Hessian along v by central differences
-        of the gradient: for a decision, not the motion), its position moved by ``shift`` along v (v then
-        turned to stay normal to the gradient, as on a ride)."""
+    def _gap_terms(self, k: int, shift: float = 0.0, wall: int | None = None) -> tuple:
+        """(dg/dx, dg/dy, v^T H v) of ball k's gap to ``wall`` (default: the one it rides; float, the Hessian
+        along v by central differences of the gradient: for a decision, not the motion), its position moved by
+        ``shift`` along v (v then turned to stay normal to the gradient, as on a ride)."""
         s = STATE_PER_BALL * k
-        _, c = self.system.walls[(k, 0)]
+        w = self.ride_wall[k] if wall is None else wall
+        _, c = self.system.walls[(k, w)]
         c = [float(v) for v in c]
         gradient = self.scene.boundary.gradient
+
         x, y, vx, vy = (float(v) for v in self.state[s:s + 4])
         speed = math.hypot(vx, vy)
         if speed == 0:
-            return (*gradient(0, x, y, c), 0.0)
+            return (*gradient(w, x, y, c), 0.0)
         ux, uy = vx / speed, vy / speed
         if shift:
             x, y = x + shift * ux, y + shift * uy
-            gx, gy = gradient(0, x, y, c)
+            gx, gy = gradient(w, x, y, c)
             norm = math.hypot(gx, gy)
             turn = 1.0 if gx * uy - gy * ux >= 0 else -1.0  # the side of the normal v is on
             ux, uy = -turn * gy / norm, turn * gx / norm
-        gx, gy = gradient(0, x, y, c)
+        gx, gy = gradient(w, x, y, c)
         h = 1e-6 * float(self.geometry.size)
-        fx, fy = gradient(0, x + h * ux, y + h * uy, c)
-        bx, by = gradient(0, x - h * ux, y - h * uy, c)
+        fx, fy = gradient(w, x + h * ux, y + h * uy, c)
+        bx, by = gradient(w, x - h * ux, y - h * uy, c)
         return gx, gy, speed * speed * (ux * (fx - bx) + uy * (fy - by)) / (2 * h)
 
     def _free_acceleration(self, k: int) -> tuple:
@@ -731,7 +749,7 @@ class _Run:
         lam = (curvature + gx * ax + gy * ay) / (gx * gx + gy * gy)
         return ax - lam * gx, ay - lam * gy
 
-    def ride(self, k: int, record: bool) -> None:
+    def ride(self, k: int, record: bool, wall: int | None = None) -> None:
         """Ball k settles onto its (curved) cushion and rides it from now on (system module docstring).
 
         The limit of the accumulating impacts (k < 1): the centre put onto the cushion's curve g = 0
@@ -741,19 +759,20 @@ class _Run:
         law_flag SETTLED, whose energy change is what the rest of the accumulation would dissipate.
         """
         s = STATE_PER_BALL * k
+        w = self.ride_wall[k] = self.ride_wall[k] if wall is None else wall
         before = list(self.state)
         energy_before = self.energy(before)
-        _, c = self.system.walls[(k, 0)]
+        _, c = self.system.walls[(k, w)]
         boundary = self.scene.boundary
         x, y = self.state[s], self.state[s + 1]
         for _ in range(PROJECTION_STEPS):
-            g = boundary.gap(0, x, y, c)
-            gx, gy = boundary.gradient(0, x, y, c)
+            g = boundary.gap(w, x, y, c)
+            gx, gy = boundary.gradient(w, x, y, c)
             step = g / (gx * gx + gy * gy)
             x, y = x - step * gx, y - step * gy
             if abs(step) * sqrt(gx * gx + gy * gy) <= self.nudge:
                 break
-        gx, gy = boundary.gradient(0, x, y, c)
+        gx, gy = boundary.gradient(w, x, y, c)
         norm = sqrt(gx * gx + gy * gy)
         nx, ny = gx / norm, gy / norm
         vx, vy = self.state[s + 2], self.state[s + 3]
@@ -766,7 +785,7 @@ class _Run:
         self.riding[k] = True
         self.set_mode(k)
         if record:
-            self.record(Contact("wall", k, 0, (nx, ny), self.zero), before, self.state, energy_before,
+            self.record(Contact("wall", k, w, (nx, ny), self.zero), before, self.state, energy_before,
                         self.energy(self.state), SETTLED)
         self.grip_or_skid(k)
 

@@ -146,6 +146,8 @@ class TableSystem:
     #: parameter index of the slip at which a skid ends (or -1); per ball, the grip event is compiled
     slip_end: int = -1
     grips: tuple = ()
+    #: (ball, wall) -> parameter index of the flag: the ball rides that wall (riding systems)
+    ride_flags: dict = None
 
     @property
     def n_balls(self) -> int:
@@ -165,9 +167,11 @@ def needs_grip(scene: TableScene, k: int) -> bool:
 
 
 def can_ride(scene: TableScene) -> bool:
-    """A ball can settle onto the cushion and ride it: a curved cushion with k < 1 (either cushion model; under
-    ``slide`` only a ball the cloth's friction keeps rolling along it, driver._Run.ride)."""
-    return scene.boundary.kind in ("ellipse", "circle") and scene.cushion.restitution < 1
+    """A ball can settle onto the cushion and ride it: k < 1 and a curved cushion (its convex curve presses a
+    rolling ball on), or straight walls where friction can press a sliding ball on."""
+    if scene.cushion.restitution >= 1:
+        return False
+    return scene.boundary.kind in ("ellipse", "circle") or any(can_slide(scene, k) for k in range(scene.n_bodies))
 
 
 def table_system(scene: TableScene, precision: Precision) -> TableSystem:
@@ -206,7 +210,11 @@ def table_system(scene: TableScene, precision: Precision) -> TableSystem:
     ride = can_ride(scene)
     alpha = slip_end = -1
     grips = ()
+    ride_flags = {}
     if ride:
+        for key in walls:
+            ride_flags[key] = len(pars)
+            pars.append(num(0))
         slip_end = len(pars)  # before alpha, which every riding system uses last (heyoka counts them)
         pars.append(num(2.0**10 * precision.epsilon * _extent_size(scene) / crossing))
         alpha = len(pars)
@@ -216,7 +224,8 @@ def table_system(scene: TableScene, precision: Precision) -> TableSystem:
         events += [TableEvent("grip", k) for k in range(n) if grips[k]]
     shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown, ride, grips)
     return TableSystem(events=tuple(events), walls=walls, pairs=pairs, pars=tuple(pars), rolls=rolls, shape=shape,
-                       cooldown=cooldown, max_step=crossing, ride=ride, alpha=alpha, slip_end=slip_end, grips=grips)
+                       cooldown=cooldown, max_step=crossing, ride=ride, alpha=alpha, slip_end=slip_end, grips=grips,
+                       ride_flags=ride_flags)
 
 
 def _crossing_time(scene: TableScene) -> float:
@@ -293,7 +302,7 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
             c = [par[first + m] for m in range(len(values))]
             gap = scene.boundary.gap(ev.other, x, y, c)
             if system.ride:  # the constant -1 while the ball rides this cushion
-                riding = par[BALL_PARS * k + RIDING]
+                riding = par[system.ride_flags[(k, ev.other)]]
                 gap = gap * (1. - riding) - riding
             events.append(hy.t_event(gap, direction=positive, **typed))
         elif ev.kind == "pair":
@@ -341,28 +350,33 @@ class _CushionTerms:
 
 def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables) -> _CushionTerms:
     """The cushion's constraint acceleration -r lambda grad g on ball k and, while it skids, the cloth's
-    friction along the turning slip (module docstring).
+    friction along the turning slip (module docstring), summed over its walls, each with its flag r (one is
+    1 while the ball rides it).
 
-    Where the ball does not ride (r = 0) the denominator is |grad g|^2 + 1, never 0 (grad g vanishes at the
-    centre of an ellipse), and the term is multiplied by 0; a ball that does not skid (flag 0) has the
+    Where the ball does not ride a wall (r = 0) the denominator is |grad g|^2 + 1, never 0 (grad g vanishes at
+    the centre of an ellipse), and the term is multiplied by 0; a ball that does not skid (flag 0) has the
     friction term 0 and |u| under the square root offset by 1."""
     x, y, vx, vy, ux, uy = variables
     par = hy.par
-    first, values = system.walls[(k, 0)]
-    c = [par[first + m] for m in range(len(values))]
-    g = scene.boundary.gap(0, x, y, c)
-    gx, gy = hy.diff(g, x), hy.diff(g, y)
-    gxx, gxy, gyy = hy.diff(gx, x), hy.diff(gx, y), hy.diff(gy, y)
     base = BALL_PARS * k
-    riding, alpha, skid = par[base + RIDING], par[system.alpha], par[base + SKID]
+    alpha, skid = par[system.alpha], par[base + SKID]
     slip = hy.sqrt(ux * ux + uy * uy + (1. - skid) + TINY)
     fx, fy = -skid * par[base + MU_G] * ux / slip, -skid * par[base + MU_G] * uy / slip
-    curvature = vx * vx * gxx + 2. * vx * vy * gxy + vy * vy * gyy
-    gradient2 = gx * gx + gy * gy
-    pressing = curvature + gx * fx + gy * fy
-    lam = riding * (pressing + 2. * alpha * (gx * vx + gy * vy) + alpha * alpha * g) / (gradient2 + (1. - riding))
+    cx = cy = pressing = curvature = gradient2 = 0.
+    for w in range(scene.boundary.n_walls()):
+        first, values = system.walls[(k, w)]
+        c = [par[first + m] for m in range(len(values))]
+        g = scene.boundary.gap(w, x, y, c)
+        gx, gy = hy.diff(g, x), hy.diff(g, y)
+        gxx, gxy, gyy = hy.diff(gx, x), hy.diff(gx, y), hy.diff(gy, y)
+        riding = par[system.ride_flags[(k, w)]]
+        bend = vx * vx * gxx + 2. * vx * vy * gxy + vy * vy * gyy
+        press = bend + gx * fx + gy * fy
+        g2 = gx * gx + gy * gy
+        lam = riding * (press + 2. * alpha * (gx * vx + gy * vy) + alpha * alpha * g) / (g2 + (1. - riding))
+        cx, cy = cx - lam * gx, cy - lam * gy
+        pressing, curvature, gradient2 = pressing + riding * press, curvature + riding * bend, gradient2 + riding * g2
     hold = par[base + RIDE_HOLD] * (par[base + RIDE_SPEED2] - vx * vx - vy * vy)  # 0 unless rolling on it
-    cx, cy = -lam * gx, -lam * gy
     rate = -skid * par[base + MU_G_U] / slip
     return _CushionTerms(ax=fx + cx + hold * vx, ay=fy + cy + hold * vy, bx=rate * ux + skid * cx,
                          by=rate * uy + skid * cy, slip=slip, curvature=curvature, pressing=pressing,
