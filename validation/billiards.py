@@ -797,6 +797,16 @@ def skid_section(cfg) -> tuple[list[str], dict]:
         error = max(abs(float(r) - e) for r, e in zip(reference, run.state_final))
         lines.append(f"| {t:g} | {error:.1e} | {run.steps} |")
         out[f"skid_{t}"] = error
+    from heyroll.simulation.driver import RunOptions
+    t = cfg["skid_times"][0]
+    run = simulate(table_scene(CIRCLE, [start], cushion="slide", cushion_k="0.5", name="skid"),
+                   RunOptions(precision="quad", t_end=t))
+    with mpmath.workdps(50):
+        reference = reference_skid("0.9", mpmath.mpf(7) / 5, mpmath.mpf("0.2") * mpmath.mpf("9.81"), "0.9", 0, 0, 1, 0, 1,
+                                   t, dps=45)
+        error = max(abs(mpmath.mpf(str(e)) - r) for r, e in zip(reference, run.state_final))
+    out["skid_quad"] = float(error)
+    lines.append(f"| {t:g} (quad; reference at 45 digits) | {float(error):.1e} | {run.steps} |")
     scene = table_scene(CIRCLE, [start], cushion="slide", cushion_k="0.5", name="skid")
     run = simulate(scene, t_end=1.0)
     system = table_system(scene, DOUBLE)

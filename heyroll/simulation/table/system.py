@@ -18,12 +18,15 @@ parameters per ball, switched by the driver at events; the wall constants
 (table geometry and ball radius) and the pairs' reach are parameters too,
 so one compiled integrator serves every scene of the same shape.
 
-Riding a curved cushion (compiled only where it can happen: a curved
-cushion with k < 1). With k < 1 every impact on a
+Riding a cushion (compiled only where it can happen: k < 1 and a curved
+cushion, or straight walls where friction can press a sliding ball on).
+With k < 1 every impact on a
 convex cushion scales the normal speed by k and keeps the tangential one:
 the impacts accumulate in a finite time (a Zeno sequence) and, in their
-limit, the ball rolls on along the cushion, pressed against it. The driver
-then sets the ball's riding flag r and the centre follows the curve
+limit, the ball rolls on along the cushion, pressed against it (on a
+straight wall only a sliding ball whose friction drives it in gets there).
+The driver then sets the ball's riding flag r for that wall (one parameter
+per ball and wall) and the centre follows the curve
 g(x, y) = 0 of its wall gap under the cushion's normal force alone (no
 friction in the cushion, the ball rolls on the cloth): the constraint
 acceleration -lambda grad g with
