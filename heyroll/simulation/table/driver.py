@@ -778,9 +778,11 @@ class _Run:
         vx, vy = self.state[s + 2], self.state[s + 3]
         vn = vx * nx + vy * ny
         self.state[s:s + 4] = [x, y, vx - vn * nx, vy - vn * ny]
-        if self.needs_grip[k]:
+        if self.needs_grip[k] and record:
             # the slide model's cushion pushes through the centre: the spin is kept, the slip takes the change
-            # of v (energy then falls by 1/2 m v_n^2; keeping the slip instead turned the spin and made energy)
+            # of v (energy then falls by 1/2 m v_n^2; keeping the slip instead turned the spin and made energy).
+            # Not for a rider's round-off normal speed (record False): that is no impulse, and as a slip of
+            # ~1e-17 it made a skid end at once, an event at every instant of every other ball (measured).
             self.state[s + 4], self.state[s + 5] = self.state[s + 4] - vn * nx, self.state[s + 5] - vn * ny
         self.riding[k] = True
         self.set_mode(k)
