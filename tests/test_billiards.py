@@ -485,7 +485,8 @@ def test_ctrl_c_leaves_a_complete_table_and_summary(tmp_path):
     assert all(len(r) == len(rows[0]) and r["reflection_angle"] != "" for r in rows)
 
 
-@pytest.mark.parametrize("name", ["elliptical_billiard", "cut_shot", "newtons_cradle", "dissipative_ellipse"])
+@pytest.mark.parametrize("name", ["elliptical_billiard", "cut_shot", "newtons_cradle", "dissipative_ellipse",
+                                  "skidding_ellipse"])
 def test_the_table_examples_run(name):
     from heyroll.interfaces.scene_file import load_scene
 
@@ -504,6 +505,10 @@ def test_the_table_examples_run(name):
         summary = longer.summary()
         assert summary["riding_final"] == list(longer.riding_final) and set(summary["riding_final"]) <= {1, 2, 3}
         assert summary["steps"] > 0 and summary["settings"]["tolerance"] == 2.0**-52
+    if name == "skidding_ellipse":  # ball 1 loses its grip and skids, again and again; ball 2 settles and skids
+        assert result.riding_final == (1, 2) and result.n_rerolls >= 3
+        assert list(result.collision_table()["law_flag"]).count(4) >= 2
+        assert result.energy_final < result.energy_initial
 
 
 def test_a_ball_settling_onto_a_curved_cushion_rides_it():
