@@ -82,6 +82,13 @@ again at its end on the engine as it is then ("Probes").
    skid's slip ends for SKID_ONSET from 2^-18 to 2^-34 against the smallest,
    with the steps and wall time of each (the onset's cost and error).
 
+7. Random dissipative scenes: seeded random tables (circle, ellipse,
+   rectangle), 1-3 balls at up to 3 m/s, k_c in [0.3, 0.95], mu in
+   [0.02, 0.3], either cushion model, the ball laws hedrih/newton/slide,
+   30 s each: how many complete, how the others stop, wall times. Before the
+   skid (the parent of this study's section 6) a slide-model ball that grazed
+   or was pressed onto a cushion stopped the run.
+
 --quick: 1e5 impacts of drift and fewer impacts elsewhere (< 3 min);
 --tiny: a smoke test of every section (seconds, for tests).
 """
@@ -715,13 +722,13 @@ def draw_birkhoff(maps: dict, path: Path) -> None:
 MODES = {
     "default": dict(local=200, quad=100, global_=20, global_quad=True, speed_particle=50_000, speed_ball=10_000,
                     speed_many=10_000, speed_sizes=(4, 16), repeat=2, drift=1_000_000, finite=2000, map=2000,
-                    ride=10_000, skid_times=(0.02, 0.05, 0.1, 0.14), onsets=(18, 22, 26, 30, 34)),
+                    ride=10_000, skid_times=(0.02, 0.05, 0.1, 0.14), onsets=(18, 22, 26, 30, 34), random_scenes=100),
     "quick": dict(local=200, quad=50, global_=20, global_quad=True, speed_particle=20_000, speed_ball=5000,
                   speed_many=4000, speed_sizes=(4, 16), repeat=1, drift=100_000, finite=2000, map=800, ride=1000,
-                  skid_times=(0.05, 0.14), onsets=(18, 22, 26, 30)),
+                  skid_times=(0.05, 0.14), onsets=(18, 22, 26, 30), random_scenes=30),
     "tiny": dict(local=30, quad=15, global_=8, global_quad=False, speed_particle=2000, speed_ball=500,
                  speed_many=500, speed_sizes=(4,), repeat=1, drift=10_000, finite=300, map=150, ride=50,
-                 skid_times=(0.05,), onsets=(22, 26)),
+                 skid_times=(0.05,), onsets=(22, 26), random_scenes=3),
 }
 
 
@@ -859,6 +866,50 @@ def skid_section(cfg) -> tuple[list[str], dict]:
     return lines, out
 
 
+def random_dissipative_scene(rng) -> tuple:
+    """One seeded random scene of section 7 (module docstring): (description, scene)."""
+    boundary = rng.choice(["ellipse", "circle", "ellipse", "rectangle"])
+    text = {"ellipse": ELLIPSE, "circle": CIRCLE, "rectangle": 'boundary = "rectangle"\nwidth = 3.0\nheight = 1.6'}
+    cushion, cushion_k = rng.choice(["slide", "slide", "rolling"]), round(rng.uniform(0.3, 0.95), 3)
+    friction, law = round(rng.uniform(0.02, 0.3), 3), rng.choice(["hedrih", "newton", "slide"])
+    balls = []
+    while len(balls) < rng.choice([1, 1, 2, 3]):
+        x, y = rng.uniform(-1.2, 1.2), rng.uniform(-0.6, 0.6)
+        if boundary == "circle":
+            x *= 0.6
+        if all((x - float(b["x"])) ** 2 + (y - float(b["y"])) ** 2 > 0.25**2 for b in balls):
+            speed, angle = rng.uniform(0.3, 3.0), rng.uniform(0, 2 * math.pi)
+            balls.append(body(repr(x), repr(y), repr(speed * math.cos(angle)), repr(speed * math.sin(angle)),
+                              mass="0.17"))
+    scene = table_scene(text[boundary], balls, law=law, name="random", cushion_k=str(cushion_k), cushion=cushion,
+                        friction=str(friction))
+    return f"{boundary}, {len(balls)} ball(s), cushion {cushion} k={cushion_k}, mu={friction}, law {law}", scene
+
+
+def random_scenes_section(cfg) -> tuple[list[str], dict]:
+    """Section 7 (module docstring): statuses and wall times of seeded random dissipative scenes."""
+    import random
+    from collections import Counter
+
+    rng = random.Random(2026)
+    tally, walls, slowest = Counter(), [], (0.0, "")
+    for _ in range(cfg["random_scenes"]):
+        what, scene = random_dissipative_scene(rng)
+        started = time.perf_counter()
+        result = simulate(scene, t_end=30.0, max_collisions=20_000)
+        wall = time.perf_counter() - started
+        walls.append(wall)
+        slowest = max(slowest, (wall, what))
+        tally[(result.status.value, result.message.split(" at t")[0].split(" after ")[0][:60])] += 1
+    lines = ["## 7. Random dissipative scenes", "",
+             f"{cfg['random_scenes']} seeded random scenes (module docstring), 30 s each, max_collisions 20,000:", "",
+             "| runs | status | message |", "|---|---|---|"]
+    lines += [f"| {n} | {status} | {message} |" for (status, message), n in tally.most_common()]
+    lines += ["", f"Wall time per scene: median {float(np.median(walls)):.2f} s, total {sum(walls):.1f} s; slowest "
+              f"{slowest[0]:.1f} s ({slowest[1]}).", ""]
+    return lines, {"tally": dict(tally), "walls": walls}
+
+
 def source_state() -> str:
     """The commit of the package and whether heyroll/ has uncommitted edits (read-only git calls)."""
     import subprocess
@@ -981,6 +1032,7 @@ def main(argv=None) -> str:
         finite, _ = finite_ball_section(cfg, figure)
         riding, _ = riding_section(cfg)
         skidding, _ = skid_section(cfg)
+        randomly, _ = random_scenes_section(cfg)
         probed = probes(tiny=name == "tiny")
     finally:
         hy.llvm_state.set_diskcache_enabled(cache)
@@ -1007,7 +1059,7 @@ def main(argv=None) -> str:
     stops = ["## Engine stops in this study's runs", ""]
     stops += [f"- {what}: {message}" for what, message in FAILURES] or ["None: every run reached its impact count."]
     stops.append("")
-    text = "\n".join(head + accuracy + speed + drift + finite + riding + skidding + stops + probed)
+    text = "\n".join(head + accuracy + speed + drift + finite + riding + skidding + randomly + stops + probed)
     publish(text, args.output)
     return text
 
