@@ -366,3 +366,18 @@ def test_review_cases_of_skids(case):
     table = result.collision_table()
     assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-15) + 1e-16)
     assert result.energy_final <= result.energy_initial * (1 + 1e-14)
+
+
+def test_a_sliding_ball_bouncing_on_an_elliptical_cushion_settles():
+    """Random scenes: a sliding ball's slip ended ~1e-6 s after each bounce while it still touched the cushion;
+    leave() then opened that contact past the degree-8 polynomial's round-off (~1e-10 m), which fed the next
+    bounce: 20,000 bounces at v_n/v ~ 2e-5 that never settled (max_collisions). A sliding ball now settles where
+    its chord's dip is under the overlap limit."""
+    balls = [ball("0.37449856726167696", "-0.5404047965141513", "1.5084904733587812", "1.8074635980431972"),
+             ball("0.18363052382308243", "-0.1265031851763354", "-1.4538245011447668", "-0.6970943602502346")]
+    result = simulate(table_scene(ELLIPSE, balls, law="slide", k="0.72", cushion="slide", cushion_k="0.91",
+                                  friction="0.167", t_end=30))
+    assert result.status is Status.COMPLETED and result.n_collisions < 500
+    table = result.collision_table()
+    assert list(table["law_flag"]).count(SETTLED) >= 2
+    assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-15))
