@@ -45,19 +45,20 @@ def path_points(result, max_pieces: int = DRAWN_PIECES) -> list:
     ends = [p[0] for p in pieces[1:]] + [float(result.t_final)]
     last = [float(v) for v in result.state_final]
     following = [p[1] for p in pieces[1:]] + [last]
-    curved = hasattr(scene.boundary, "centre_curve")
+    curved = scene.boundary.kind in ("ellipse", "circle")  # a polygon's centre_curve is its corners' polygon
     out = [[] for _ in range(n)]
     for (t0, state, acc, riding), t1, after in zip(pieces, ends, following):
         for k in range(n):
             x, y, vx, vy = state[6 * k:6 * k + 4]
             if k in riding:
                 x1, y1, vx1, vy1 = after[6 * k:6 * k + 4]
+                skids = state[6 * k + 4] != 0 or state[6 * k + 5] != 0  # drawn dashed, as sliding
                 if not curved:
-                    out[k].append((np.array([x, x1]), np.array([y, y1]), False))
+                    out[k].append((np.array([x, x1]), np.array([y, y1]), skids))
                     continue
                 mean = (np.hypot(vx, vy) + np.hypot(vx1, vy1)) / 2
                 scale = mean / np.hypot(vx, vy) if np.hypot(vx, vy) > 0 else 0.0
-                out[k].append((*along_cushion(scene, k, x, y, vx * scale, vy * scale, max(t1 - t0, 0)), False))
+                out[k].append((*along_cushion(scene, k, x, y, vx * scale, vy * scale, max(t1 - t0, 0)), skids))
                 continue
             ax, ay = acc[2 * k], acc[2 * k + 1]
             sliding = ax != 0 or ay != 0

@@ -97,7 +97,9 @@ class PolygonBoundary:
 
     def gap_scale(self, wall, c):
         """Magnitude of the gap function's terms at the wall (its round-off is a few ulps of this)."""
-        return abs(c[2]) + abs(self.vertices[wall][0]) + abs(self.vertices[wall][1])
+        # the vertices are mpmath numbers: a float of their size (a scale of round-off, not a value) adds to any
+        # run type (quad and MPFR runs raised TypeError on real128 + mpf: review)
+        return abs(c[2]) + float(abs(self.vertices[wall][0]) + abs(self.vertices[wall][1]))
 
     def gradient(self, wall, x, y, c):
         return c[0], c[1]
