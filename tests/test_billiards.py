@@ -640,3 +640,31 @@ def test_simultaneous_impulses_never_make_energy(law):
                                   simultaneous="impulses", t_end=15))
     table = result.collision_table()
     assert np.all(table["energy_after"] - table["energy_before"] <= 1e-13 * result.energy_initial)
+
+
+TRIANGLE = 'boundary = "polygon"\nvertices = [[-1.0, -0.6], [1.0, -0.6], [0.0, 1.0]]'
+
+
+@pytest.mark.parametrize("law, cushion, k, k_c, mu, vx, vy, ux, uy", [
+    ("newton", "slide", "0.9", "0", "1e-6", "-1.7554", "2.2787", "0", "0"),   # into the apex: pinned there
+    ("slide", "slide", "1", "0", "0.5", "-0.3", "1.8", "0", "0"),               # a corner at k = 0
+    ("mirror", "rolling", "1", "0", "0.01", "0.4", "1.6", "0", "0"),
+    ("newton", "slide", "1", "0.3", "0.05", "0.3", "-0.2", "-1.0", "1.0"),      # review 2's triangle
+])
+def test_a_ball_in_an_acute_corner_stays_on_the_table(law, cushion, k, k_c, mu, vx, vy, ux, uy):
+    """Random scenes and review 2, 60-degree corners: a ball riding one wall into the other at k_c = 0 was passed
+    between them 10,000 times at one instant (velocities into denormals, 'inelastic collapse'), or friction drove
+    it into the corner along one wall while drawing it from the other and it slid through that one (overlap,
+    up to 0.11 m). Now a ball meeting two walls is one simultaneous solution, a round-off approach is no impact,
+    and a sliding ball at rest in a corner is pinned there or rides the wall its friction presses into."""
+    from test_cushion_riding import slipping
+
+    start = slipping(-0.36033, -0.13482, float(vx), float(vy), float(ux or 0), float(uy or 0), radius=0.1)
+    if ux == "0" and uy == "0":
+        start = ball("-0.36033", "-0.13482", vx, vy)
+    result = simulate(table_scene(TRIANGLE, [start], law=law, k=k, cushion=cushion, cushion_k=k_c, friction=mu,
+                                  t_end=30))
+    assert result.status is Status.COMPLETED, result.message
+    assert result.n_collisions < 500
+    table = result.collision_table()
+    assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-15) + 1e-16)

@@ -86,6 +86,9 @@ class _Run:
         self.nudge = num(precision.epsilon) * self.geometry.size
         self.round_off = num(2.0**8 * precision.epsilon)
         self.solver_tolerance = num(2.0**20 * precision.epsilon)
+        #: an approach slower than this (2^8 ulps of the scene's top speed) is round-off, not an impact: a corner's
+        #: solution left 2.8e-16 m/s, then 4.9e-32, ... 10,000 times at one instant (random scenes)
+        self.speed_floor = self.round_off * self.geometry.size / num(self.system.max_step)
         #: (v_n / v)^2 below which a ball grazing a curved cushion cannot be followed (check_grazing):
         #: the chord's dip v_n^2 rho/(2 v^2) under the contact resolution, rho the least radius of curvature
         curvature = scene.boundary.least_curvature_radius(max(b.body.radius for b in scene.balls)) \
@@ -240,11 +243,15 @@ class _Run:
         zero = self.zero
         mode = [zero] * MODE_PARS
         sliding = ux != zero or uy != zero
-        if self.riding[k] and sliding and ux * ux + uy * uy <= self.pars[self.system.slip_end] ** 2:
-            # a rider's slip at or below SLIP_END has ended (the settle's round-off normal speed moved into
-            # it under the slide model, ~1e-17): skidding from there would take steps of its size
-            self.state[s + 4] = self.state[s + 5] = zero
-            sliding = False
+        if self.riding[k] and sliding and self.pinned[k] is None:
+            # a rider's slip under SKID_ONSET/2 ends at once (with friction; SLIP_END without): its direction
+            # relaxes at nu/|u|, so a skid from a slip of 1e-13 took steps of that size and heyoka's state went
+            # non-finite (a ball in a 60 degree corner, its bounces leaving slips of 1e-12: random scenes); an
+            # error of at most that slip (7e-9 of the top speed) where a corner or settle leaves one
+            floor = self.skid_onset / 2 if self.pars[BALL_PARS * k + MU_G] > zero else self.pars[self.system.slip_end]
+            if ux * ux + uy * uy < floor * floor:
+                self.state[s + 4] = self.state[s + 5] = zero
+                sliding = False
         if self.pinned[k] is not None and sliding:
             # pinned in a corner: at rest, the walls take the friction's push, the slip shrinks along its own
             # direction at mu g/(kappa - 1) (w' = -f/((kappa - 1) m), v' = 0)
@@ -262,7 +269,9 @@ class _Run:
                 vx, vy = self.state[s + 2], self.state[s + 3]
                 speed2 = vx * vx + vy * vy
                 mode[RIDE_SPEED2] = speed2
-                mode[RIDE_HOLD] = self.pars[self.system.alpha] / (2 * speed2) if speed2 > zero else zero
+                # (0 at rest, and for a speed of round-off: alpha / (2 V^2) overflowed, random scenes)
+                slow = self.speed_floor * self.speed_floor
+                mode[RIDE_HOLD] = self.pars[self.system.alpha] / (2 * speed2) if speed2 > slow else zero
                 if self.system.grips[k] and k not in self.onsets:
                     mode[GRIP] = zero + 1
         elif self.system.rolls[k] and sliding:
@@ -372,6 +381,39 @@ class _Run:
         self.set_mode(k)
         self.record(Contact("wall", k, walls[1], normal, self.zero), before, self.state, energy_before,
                     self.energy(self.state), SETTLED)
+
+    def settle_corners(self, near: list) -> None:
+        """A sliding ball at rest in a corner (two walls touching, its speed round-off: a corner's solution at
+        k = 0 leaves it so): friction f = a n_A + b n_B (n the walls' outward normals). With a, b >= 0 it
+        drives the ball into the corner: pinned (:meth:`pin`). Otherwise it rides the wall f presses into,
+        away from the other, or neither. (Each wall on its own is not the test: in a 60 degree corner f
+        pressed into one wall, drew away from the other, and still drove the ball into the corner along the
+        first; it slid through the second: review.)"""
+        walls: dict = {}
+        for c in near:
+            if c.kind == "wall":
+                walls.setdefault(c.i, []).append(c)
+        for k, touching in walls.items():
+            if len(touching) < 2 or self.pinned[k] is not None or not self.slides(k):
+                continue
+            s = STATE_PER_BALL * k
+            vx, vy = self.state[s + 2], self.state[s + 3]
+            if abs(vx) + abs(vy) > self.speed_floor:
+                continue
+            first, second = touching[0], touching[1]
+            (ax_, ay_), (bx_, by_) = ((float(v) for v in c.normal) for c in (first, second))
+            fx, fy = self._free_acceleration(k)
+            det = ax_ * by_ - ay_ * bx_
+            if det == 0:
+                continue
+            a = (fx * by_ - fy * bx_) / det
+            b = (ax_ * fy - ay_ * fx) / det
+            if a >= 0 and b >= 0:
+                self.pin(k, (first.j, second.j), second.normal)
+            elif a > 0 or b > 0:
+                wall = first.j if a > 0 else second.j
+                if not (self.riding[k] and self.ride_wall[k] == wall):
+                    self.ride(k, record=False, wall=wall)
 
     def presses(self, k: int, wall: int) -> bool:
         """Ball k's free acceleration (its sliding friction) drives it into ``wall``."""
@@ -531,6 +573,8 @@ class _Run:
             self.status, self.message = Status.OVERLAP, (
                 f"{what} overlap by {float(-c.distance):.3g} m at t = {float(self.t):.17g} s: an impact was missed")
             return
+        if self.system.ride:
+            self.settle_corners(near)
         for c in near:
             if c.kind == "wall":
                 self.check_cushion_contact(c)
@@ -557,7 +601,7 @@ class _Run:
         (settle_riders; its normal speed is otherwise round-off: measured, k = 0 met +4.6e-17 again and
         again, 10,000 impacts at one instant)."""
         speed = self.geometry.approach(contact, self.state)
-        if not speed > self.zero:
+        if not speed > self.speed_floor:
             return False
         if contact.kind == "pair":  # round-off is no approach: a law leaving +6.9e-18 was resolved 10,000 times
             s, o = STATE_PER_BALL * contact.i, STATE_PER_BALL * contact.j
