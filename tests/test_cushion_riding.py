@@ -381,3 +381,14 @@ def test_a_sliding_ball_bouncing_on_an_elliptical_cushion_settles():
     table = result.collision_table()
     assert list(table["law_flag"]).count(SETTLED) >= 2
     assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-15))
+
+
+def test_a_slide_model_cushion_at_k_1_still_settles_a_ball():
+    """Acceptance test: under the slide cushion model the slip a bounce leaves carries the ball back by
+    (kappa - 1)/kappa (1 + k) of its normal speed once friction ends it: at k = 1 its bounces still shrink (by
+    0.43, a solid sphere) and accumulate on a curved cushion; riding was compiled only for k < 1 and the run
+    stopped ('riding it is modelled only for k < 1'). Now it settles and rides."""
+    result = simulate(table_scene(CIRCLE, [ball("0.2", "0.1", "0.6", "0.9")], cushion="slide", cushion_k="1",
+                                  t_end=40))
+    assert result.status is Status.COMPLETED, result.message
+    assert SETTLED in list(result.collision_table()["law_flag"]) and result.riding_final == (1,)
