@@ -134,7 +134,7 @@ def table_paths_figure(result, path: Path) -> None:
     shown = min(len(result.paths), DRAWN_PIECES)
     ax.set_title(f"{scene.boundary.describe()}: paths of the first {shown} pieces of motion\n"
                  f"({result.n_collisions} impacts; dashed: sliding)", fontsize=9)
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # beside the table, not over a corner
     _save(fig, path)
 
 

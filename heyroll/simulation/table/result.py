@@ -62,6 +62,8 @@ def impact_table(scene: TableScene, records: list, precision: Precision, first_n
         vy = np.array([float(v) for v in cols[index["vy_i_after"]]])[cushion]
         # angle of the outgoing velocity from the inward normal, > 0 toward the counter-clockwise tangent
         angle[cushion] = np.arctan2(vx * -ny[cushion] + vy * nx[cushion], -(vx * nx[cushion] + vy * ny[cushion]))
+        # a ball at rest after it (k = 0 head-on, pinned in a corner) has no angle (atan2(0, -0) gave pi)
+        angle[np.flatnonzero(cushion)[(vx == 0) & (vy == 0)]] = np.nan
     empty = None if wide else np.nan
     for name in ("x_j", "y_j", "vx_j_before", "vy_j_before", "vx_j_after", "vy_j_after"):
         if wide:

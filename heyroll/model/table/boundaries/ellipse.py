@@ -111,7 +111,7 @@ class EllipseBoundary:
         with workprec():
             limit = min(self.a, self.b) ** 2 / max(self.a, self.b)
         if radius >= limit:
-            raise SceneError(field, f"a ball of radius {mpmath.nstr(radius, 6)} needs R < b^2/a = "
+            raise SceneError(field, f"a ball of radius {mpmath.nstr(radius, 6)} needs R < min(a, b)^2/max(a, b) = "
                                     f"{mpmath.nstr(limit, 8)} on this ellipse (beyond it the curve of its centre has "
                                     "cusps: it would touch the cushion at two points)")
 
