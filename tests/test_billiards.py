@@ -675,7 +675,7 @@ def test_a_head_on_impact_is_not_lost_where_its_exit_root_is_round(t_end):
     """Acceptance test: a ball at x = -0.8 rolling at 1 m/s into one at rest at 0 (D = 0.2): the pair's gap
     |dc|^2 - D^2 has roots 0.6 and 1.0; in one step over [0, 2] (or [0, 1]) heyoka 7.13 lost the first when the
     second lay exactly on the step's midpoint or end: no impact, the ball passed through the other, 'completed'.
-    The event is now 8 ulps inside the contact and the instant polished back onto it."""
+    The event is now 16 ulps of (R_i + R_j)^2 inside the contact and the instant polished back onto it."""
     big = 'boundary = "rectangle"\nwidth = 4.0\nheight = 2.0'
     balls = [ball("-0.8", "0", "1", "0", mass="1"), ball("0", "0", "0", "0", mass="1")]
     result = simulate(table_scene(big, balls, t_end=t_end))

@@ -711,8 +711,8 @@ class _Run:
                 step = step * 2
             return
         o = STATE_PER_BALL * contact.j
-        index, reach = self.system.pairs[(contact.i, contact.j)]
-        reach2 = self.system.pars[index]
+        _, reach = self.system.pairs[(contact.i, contact.j)]
+        reach2 = reach * reach  # the exact contact (the event's parameter is shifted inside it: system)
         margin = self.round_off * (reach2 + reach * self.geometry.size)
         for _ in range(LEAVE_DOUBLINGS):
             dx, dy = self.state[o] - self.state[s], self.state[o + 1] - self.state[s + 1]

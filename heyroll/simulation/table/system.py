@@ -212,8 +212,10 @@ def table_system(scene: TableScene, precision: Precision) -> TableSystem:
                 reach2 = reach * reach
                 shifted = reach2 * (1 - PAIR_EVENT_SHIFT * mpmath.mpf(precision.epsilon))
             pairs[(i, j)] = (len(pars), num(reach))
-            # the event 8 ulps (relative) inside contact, the driver polishes the instant onto the
-            # exact root (driver._Run.polish_pair): heyoka 7.13 lost the entry root of |dc|^2 - D^2 when its exit
+            # the event 16 ulps of (R_i + R_j)^2 (8 of the distance) inside contact, at the model's precision
+            # (in an MPFR run of more bits the shift rounds away, and so does this workaround); the driver
+            # polishes the instant onto the exact root (driver._Run.polish_pair): heyoka 7.13 lost the entry
+            # root of |dc|^2 - D^2 when its exit
             # root lay exactly on the step's end or midpoint (a ball at x = -0.8 rolling at 1 m/s into one at
             # rest at 0, t_end = 2: roots 0.6 and 1.0; no impact, the ball passed through: acceptance test)
             pars.append(num(shifted))
