@@ -111,7 +111,7 @@ def caustic(result):
 
 def table_paths_figure(result, path: Path) -> None:
     scene = result.scene
-    fig = Figure(figsize=(7, 7 * _aspect(scene)))
+    fig = Figure(figsize=(7, 7 * _aspect(scene)), layout="constrained")  # room for the legend beside the table
     ax = fig.add_subplot()
     bx, by = scene.boundary.outline()
     ax.plot(bx, by, color="k", lw=1.5, label="cushion")
