@@ -682,3 +682,24 @@ def test_a_head_on_impact_is_not_lost_where_its_exit_root_is_round(t_end):
     table = result.collision_table()
     assert result.status is Status.COMPLETED and table["t"][0] == 0.6 and (table["i"][0], table["j"][0]) == (1, 2)
     assert result.state_final[0] < result.state_final[6]  # never passed through
+
+
+def test_two_particles_at_one_point_are_no_contact():
+    """Random scenes: two particles stopped in the same corner (k_c = 0) coincided; the contact between them had
+    no direction (0/0: a ZeroDivisionError, or NaN in the vector path and heyoka's state non-finite). Two points
+    at one place do not meet; two finite balls at one centre still overlap (any normal)."""
+    from heyroll.simulation.precision import DOUBLE
+    from heyroll.simulation.table.contacts import ContactGeometry
+    from heyroll.simulation.table.system import table_system
+
+    rect = 'boundary = "rectangle"\nwidth = 2.0\nheight = 1.0'
+    for pair in ([particle("-0.5", "0", "1", "0"), particle("0.5", "0", "0", "1")],
+                 [ball("-0.5", "0", "1", "0"), ball("0.5", "0", "0", "1")]):
+        scene = table_scene(rect, pair, law="newton")
+        geometry = ContactGeometry(scene, table_system(scene, DOUBLE), DOUBLE)
+        state = [0.3, 0.2, 1.0, 0.0, 0.0, 0.0, 0.3, 0.2, 0.0, 1.0, 0.0, 0.0]
+        contacts = geometry.contacts(state, geometry.touch)
+        if pair[0]["radius"] == 0:
+            assert contacts == []
+        else:
+            assert len(contacts) == 1 and contacts[0].distance < -geometry.overlap

@@ -392,3 +392,19 @@ def test_a_slide_model_cushion_at_k_1_still_settles_a_ball():
                                   t_end=40))
     assert result.status is Status.COMPLETED, result.message
     assert SETTLED in list(result.collision_table()["law_flag"]) and result.riding_final == (1,)
+
+
+def test_two_riders_the_cushion_turns_into_each_other_stop_the_run():
+    """Random scenes: two balls riding an ellipse met; resolved (with their cushions), settled back onto it, they
+    met again at the same instant, 10,000 times ('inelastic collapse'). After 32 such resolutions at one instant
+    the run stops: balls pressed together are not modelled."""
+    balls = [{"shape": "hollow_sphere", "radius": "0.06", "mass": "1.0", "x": "-0.4168059802300979",
+              "y": "0.36153027707049457", "vx": "-0.12616645478367985", "vy": "0.42950357986582643"},
+             {"shape": "disk", "radius": "0.03", "mass": "0.17", "x": "-0.3939185035320094", "y": "0.1535040802836416",
+              "vx": "0.3199067987444593", "vy": "-1.3446275963138654"},
+             {"shape": "particle", "radius": "0.0", "mass": "0.17", "x": "0.01238637211167204",
+              "y": "0.24841092036727075", "vx": "-1.53537510268215", "vy": "0.061140105373698045"}]
+    result = simulate(table_scene(ELLIPSE, balls, law="slide", k="1", cushion_k="0", simultaneous="impulses",
+                                  t_end=20))
+    assert result.status is Status.FAILED and "balls 2 and 3 stay pressed together" in result.message
+    assert "rides the cushion" in result.message and result.n_collisions < 1000

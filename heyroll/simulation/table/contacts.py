@@ -107,6 +107,8 @@ class ContactGeometry:
         dx, dy = xj - xi, yj - yi
         d = sqrt(dx * dx + dy * dy)
         _, reach = self.system.pairs[(i, j)]
+        if not d > self.zero:  # one centre: no direction (two balls that far overlap are reported, any normal)
+            return d - reach, (self.zero + 1, self.zero)
         return d - reach, (dx / d, dy / d)
 
     def contacts(self, state, within) -> list:
@@ -118,8 +120,8 @@ class ContactGeometry:
         for i in range(n):
             for j in range(i + 1, n):
                 d, nrm = self.pair(i, j, state)
-                if d <= within:
-                    out.append(Contact("pair", i, j, nrm, d))
+                if d <= within and not (d == self.zero and not self.system.pairs[(i, j)][1] > self.zero):
+                    out.append(Contact("pair", i, j, nrm, d))  # (two particles at one point do not meet)
         for (k, w) in self.system.walls:
             d, nrm = self.wall(k, w, state[STATE_PER_BALL * k], state[STATE_PER_BALL * k + 1])
             if d <= within:
@@ -161,6 +163,10 @@ class ContactGeometry:
             d = np.hypot(dx, dy)
             distance = d - reach
             for m in np.flatnonzero(distance <= within):
+                if d[m] == 0:  # one centre: two particles do not meet; two balls that far overlap, any normal
+                    if reach[m] > 0:
+                        out.append(Contact("pair", int(first[m]), int(second[m]), (1.0, 0.0), distance[m]))
+                    continue
                 out.append(Contact("pair", int(first[m]), int(second[m]), (dx[m] / d[m], dy[m] / d[m]),
                                    distance[m]))
         walls = []

@@ -24,6 +24,8 @@ from .result import TableResult
 from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, MODE_PARS, MU_G, RIDE_HOLD, RIDE_SPEED2, RIDING,
                      SKID, SLIDING, SPIN, STATE_PER_BALL, integrator, needs_grip, table_system)
 
+#: Resolutions of one pair with a riding ball at one instant before it counts as pressed together.
+RIDER_PAIR_REPEATS = 32
 #: Steps per call of propagate_until (a call that does not advance the time means heyoka is stuck).
 STEP_CHUNK = 100_000
 #: Impacts at one instant before the run is declared stuck (an inelastic collapse).
@@ -557,6 +559,7 @@ class _Run:
             self.resolve(fired)
         first = fired if impulses else None
         cleanup = False  # 'impulses' after its simultaneous resolution: what it left, one by one
+        rider_hits: dict = {}  # a pair with a riding ball resolved at this instant, how often
         for _ in range(MAX_AT_ONE_INSTANT):
             if self.status is not None:
                 if not impulses:
@@ -594,6 +597,20 @@ class _Run:
                     break
                 corner = [c for c in near if c.kind == "wall" and c.i == waiting[0].i] \
                     if waiting[0].kind == "wall" else []
+                pair = waiting[0]
+                if pair.kind == "pair" and (self.riding[pair.i] or self.riding[pair.j]):
+                    key = (pair.i, pair.j)
+                    rider_hits[key] = rider_hits.get(key, 0) + 1
+                    if rider_hits[key] > RIDER_PAIR_REPEATS:
+                        # resolved, settled back onto the cushion, met again, at one instant: the cushion turns
+                        # them into each other (it went on 10,000 times: random scenes)
+                        self.stop_pressed(pair)
+                        break
+                    if not cleanup:
+                        # a hit riding ball presses on its cushion as the impact happens: the pair and the riders'
+                        # cushions in one solution, as under 'impulses' (after that solution, 'impulses' resolves
+                        # what is left by the scene's law: Hedrih's on unequal radii leaves pairs approaching)
+                        corner = [pair] + [c for c in near if self.rides(c) and c.i in (pair.i, pair.j)]
                 if len(corner) > 1:
                     # a ball in a corner meets both walls at once: one solution (pairwise, an acute corner at k = 0
                     # passed the velocity between them 3,499 times, into denormals, and the ball left the table)
@@ -905,13 +922,19 @@ class _Run:
         opening = rvx * nx + rvy * ny
         tangential2 = rvx * rvx + rvy * rvy - opening * opening
         _, reach = self.system.pairs[(i, j)]
+        if not reach > self.zero:
+            return  # two particles: points, nothing to press (and no curvature of their gap to divide by)
         acceleration = (aj[0] - ai[0]) * nx + (aj[1] - ai[1]) * ny + tangential2 / float(reach)
         if acceleration < 0 and opening * opening < 2 * -acceleration * float(self.geometry.touch):
-            riders = [k + 1 for k in (i, j) if self.riding[k]]
-            why = (f"ball {riders[0]} rides the cushion, which turns it into the other" if riders else
-                   "sliding friction drives them together")
-            self.stop(Status.FAILED, f"balls {i + 1} and {j + 1} stay pressed together at t = {float(self.t):.17g} s "
-                                     f"({why}): balls in persistent contact are not modelled")
+            self.stop_pressed(contact)
+
+    def stop_pressed(self, contact: Contact) -> None:
+        i, j = contact.i, contact.j
+        riders = [k + 1 for k in (i, j) if self.riding[k]]
+        why = (f"ball {riders[0]} rides the cushion, which turns it into the other" if riders else
+               "sliding friction drives them together")
+        self.stop(Status.FAILED, f"balls {i + 1} and {j + 1} stay pressed together at t = {float(self.t):.17g} s "
+                                 f"({why}): balls in persistent contact are not modelled")
 
     def _present_acceleration(self, k: int) -> tuple:
         """Ball k's acceleration now (float): its free one (:meth:`_free_acceleration`) and, riding, the
