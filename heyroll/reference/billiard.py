@@ -280,7 +280,7 @@ def reference_skid(rho, kappa, mu_g, x0, y0, vx, vy, ux, uy, duration, dps: int 
         rho, kappa, mu_g = (mpmath.mpf(v) for v in (rho, kappa, mu_g))
         x0, y0, vx, vy, ux, uy, duration = (mpmath.mpf(v) for v in (x0, y0, vx, vy, ux, uy, duration))
         th0 = mpmath.atan2(y0, x0)
-        tx, ty, nx, ny = -mpmath.sin(th0), mpmath.cos(th0), mpmath.cos(th0), mpmath.sin(th0)
+        tx, ty, nx, ny = _circle_frame(th0)
         ratio = kappa / (kappa - 1)
 
         def rates(t, z):
@@ -293,7 +293,7 @@ def reference_skid(rho, kappa, mu_g, x0, y0, vx, vy, ux, uy, duration, dps: int 
         solution = mpmath.odefun(rates, 0, [th0, vx * tx + vy * ty, ux * tx + uy * ty, ux * nx + uy * ny])
         th, v, ut, un = solution(duration)
         nu = -mu_g * un / mpmath.sqrt(ut * ut + un * un) + v * v / rho
-        tx, ty, nx, ny = -mpmath.sin(th), mpmath.cos(th), mpmath.cos(th), mpmath.sin(th)
+        tx, ty, nx, ny = _circle_frame(th)
         return (rho * nx, rho * ny, v * tx, v * ty, ut * tx + un * nx, ut * ty + un * ny, nu)
 
 
@@ -313,7 +313,7 @@ def reference_skid_end(rho, kappa, mu_g, x0, y0, vx, vy, ux, uy, slip_end, dps: 
         rho, kappa, mu_g, slip_end = (mpmath.mpf(v) for v in (rho, kappa, mu_g, slip_end))
         x0, y0, vx, vy, ux, uy = (mpmath.mpf(v) for v in (x0, y0, vx, vy, ux, uy))
         th0 = mpmath.atan2(y0, x0)
-        tx, ty, nx, ny = -mpmath.sin(th0), mpmath.cos(th0), mpmath.cos(th0), mpmath.sin(th0)
+        tx, ty, nx, ny = _circle_frame(th0)
         ratio = kappa / (kappa - 1)
 
         def rates(sigma, z):
@@ -329,6 +329,12 @@ def reference_skid_end(rho, kappa, mu_g, x0, y0, vx, vy, ux, uy, slip_end, dps: 
         start = -mpmath.log(mpmath.sqrt(u_t * u_t + u_n * u_n))
         solution = mpmath.odefun(rates, start, [mpmath.mpf(0), th0, vx * tx + vy * ty, mpmath.atan2(u_n, u_t)])
         t, th, v, phi = solution(-mpmath.log(slip_end))
-        tx, ty, nx, ny = -mpmath.sin(th), mpmath.cos(th), mpmath.cos(th), mpmath.sin(th)
+        tx, ty, nx, ny = _circle_frame(th)
         ut, un = slip_end * mpmath.cos(phi), slip_end * mpmath.sin(phi)
         return (t, rho * nx, rho * ny, v * tx, v * ty, ut * tx + un * nx, ut * ty + un * ny)
+
+
+def _circle_frame(th) -> tuple:
+    """(t_x, t_y, n_x, n_y) at angle ``th`` on a circle about the origin: the counter-clockwise tangent and the
+    outward normal (reference_skid, reference_skid_end)."""
+    return -mpmath.sin(th), mpmath.cos(th), mpmath.cos(th), mpmath.sin(th)

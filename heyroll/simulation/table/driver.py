@@ -254,18 +254,7 @@ class _Run:
             # error of at most that slip (7e-9 of the top speed) where a corner or settle leaves one
             floor = self.skid_onset / 2 if self.pars[BALL_PARS * k + MU_G] > zero else self.pars[self.system.slip_end]
             if ux * ux + uy * uy < floor * floor:
-                # ended as friction ends a slip, by an impulse against it: v loses (kappa - 1)/kappa of the slip
-                # (setting u = 0 alone turned the spin by u and made energy: +1.8e-13 J, acceptance test); the
-                # cushion takes the normal part of that change
-                share = self.spin_inertia[k] / (self.spin_inertia[k] + 1)
-                dvx, dvy = -share * ux, -share * uy
-                _, c = self.system.walls[(k, self.ride_wall[k])]
-                gx, gy = self.scene.boundary.gradient(self.ride_wall[k], self.state[s], self.state[s + 1], c)
-                into = (dvx * gx + dvy * gy) / (gx * gx + gy * gy)
-                if into > zero:
-                    dvx, dvy = dvx - into * gx, dvy - into * gy
-                self.state[s + 2], self.state[s + 3] = self.state[s + 2] + dvx, self.state[s + 3] + dvy
-                self.state[s + 4] = self.state[s + 5] = zero
+                self.end_slip(k, self._wall_gradient(k, self.ride_wall[k]))
                 sliding = False
         if self.pinned[k] is not None and sliding:
             # pinned in a corner: at rest, the walls take the friction's push, the slip shrinks along its own
@@ -293,10 +282,8 @@ class _Run:
             # a slip that friction ends within a few cooldowns of the roll event: heyoka would miss that root
             # (it lies in the event's cooldown after a re-roll at the same ball's last bounce) and the constant
             # friction would drive the slip through zero and on, making energy (+1.3e-13 J at 1.6e-8 J, corner
-            # bounces: acceptance test). Ended at once, as friction ends it: v loses (kappa - 1)/kappa of it
-            share = self.spin_inertia[k] / (self.spin_inertia[k] + 1)
-            self.state[s + 2], self.state[s + 3] = self.state[s + 2] - share * ux, self.state[s + 3] - share * uy
-            self.state[s + 4] = self.state[s + 5] = zero
+            # bounces: acceptance test)
+            self.end_slip(k)
             self.rerolls += 1
         elif self.system.rolls[k] and sliding:
             norm = sqrt(ux * ux + uy * uy)
@@ -309,6 +296,27 @@ class _Run:
             for w in range(self.scene.boundary.n_walls()):
                 on = self.riding[k] and (w == self.ride_wall[k] or w in (self.pinned[k] or ()))
                 self.pars[self.system.ride_flags[(k, w)]] = zero + 1 if on else zero
+
+    def end_slip(self, k: int, cushion=None) -> None:
+        """End ball k's slip at once, as friction ends a slip: by an impulse against it, v losing (kappa - 1)/kappa
+        of it (setting u = 0 alone turned the spin by u and made energy: +1.8e-13 J, acceptance test). A rider's
+        cushion (its gap's ``cushion`` gradient) takes the part of that change that points into it."""
+        s = STATE_PER_BALL * k
+        share = self.spin_inertia[k] / (self.spin_inertia[k] + 1)
+        dvx, dvy = -share * self.state[s + 4], -share * self.state[s + 5]
+        if cushion is not None:
+            gx, gy = cushion
+            into = (dvx * gx + dvy * gy) / (gx * gx + gy * gy)
+            if into > self.zero:
+                dvx, dvy = dvx - into * gx, dvy - into * gy
+        self.state[s + 2], self.state[s + 3] = self.state[s + 2] + dvx, self.state[s + 3] + dvy
+        self.state[s + 4] = self.state[s + 5] = self.zero
+
+    def _wall_gradient(self, k: int, wall: int) -> tuple:
+        """The gradient of ball k's gap to ``wall`` where the ball is (run type): out of the table."""
+        s = STATE_PER_BALL * k
+        _, c = self.system.walls[(k, wall)]
+        return self.scene.boundary.gradient(wall, self.state[s], self.state[s + 1], c)
 
     def reroll(self, k: int) -> None:
         """Ball k's slip reached zero (a skidding rider's, SLIP_END): it rolls from now on; so does every
@@ -377,9 +385,8 @@ class _Run:
     def start_skid(self, k: int, slip) -> None:
         """Rolling rider k starts to skid with a slip of size ``slip`` toward the table's inside, where the
         saturated friction drives it (system module docstring; :meth:`grip_lost`)."""
-        s, w = STATE_PER_BALL * k, self.ride_wall[k]
-        _, c = self.system.walls[(k, w)]
-        gx, gy = self.scene.boundary.gradient(w, self.state[s], self.state[s + 1], c)
+        s = STATE_PER_BALL * k
+        gx, gy = self._wall_gradient(k, self.ride_wall[k])
         norm = sqrt(gx * gx + gy * gy)
         self.state[s + 4], self.state[s + 5] = -slip * gx / norm, -slip * gy / norm
         self.set_mode(k)
@@ -446,9 +453,7 @@ class _Run:
 
     def presses(self, k: int, wall: int) -> bool:
         """Ball k's free acceleration (its sliding friction) drives it into ``wall``."""
-        s = STATE_PER_BALL * k
-        _, c = self.system.walls[(k, wall)]
-        gx, gy = self.scene.boundary.gradient(wall, self.state[s], self.state[s + 1], c)
+        gx, gy = self._wall_gradient(k, wall)
         ax, ay = self._free_acceleration(k)
         return ax * float(gx) + ay * float(gy) > 0
 
@@ -595,28 +600,20 @@ class _Run:
                 waiting = [c for c in near if self.closing(c) and (not cleanup or self.beyond_solver(c))]
                 if not waiting:
                     break
-                corner = [c for c in near if c.kind == "wall" and c.i == waiting[0].i] \
-                    if waiting[0].kind == "wall" else []
-                pair = waiting[0]
-                if pair.kind == "pair" and (self.riding[pair.i] or self.riding[pair.j]):
-                    key = (pair.i, pair.j)
+                contact = waiting[0]
+                if contact.kind == "pair" and (self.riding[contact.i] or self.riding[contact.j]):
+                    key = (contact.i, contact.j)
                     rider_hits[key] = rider_hits.get(key, 0) + 1
                     if rider_hits[key] > RIDER_PAIR_REPEATS:
                         # resolved, settled back onto the cushion, met again, at one instant: the cushion turns
                         # them into each other (it went on 10,000 times: random scenes)
-                        self.stop_pressed(pair)
+                        self.stop_pressed(contact)
                         break
-                    if not cleanup:
-                        # a hit riding ball presses on its cushion as the impact happens: the pair and the riders'
-                        # cushions in one solution, as under 'impulses' (after that solution, 'impulses' resolves
-                        # what is left by the scene's law: Hedrih's on unequal radii leaves pairs approaching)
-                        corner = [pair] + [c for c in near if self.rides(c) and c.i in (pair.i, pair.j)]
-                if len(corner) > 1:
-                    # a ball in a corner meets both walls at once: one solution (pairwise, an acute corner at k = 0
-                    # passed the velocity between them 3,499 times, into denormals, and the ball left the table)
-                    self.simultaneous(corner)
+                group = self._together(contact, near, cleanup)
+                if len(group) > 1:
+                    self.simultaneous(group)
                 else:
-                    self.resolve(waiting[0])
+                    self.resolve(contact)
         else:
             self.stop(Status.FAILED, f"more than {MAX_AT_ONE_INSTANT} impacts at t = {float(self.t):.17g} s "
                                      "(an inelastic collapse): stopped")
@@ -645,6 +642,20 @@ class _Run:
             if self.fired is None or not _same(c, self.fired):
                 self.leave(c)
 
+    def _together(self, contact: Contact, near: list, cleanup: bool) -> list:
+        """The touching contacts resolved with ``contact`` in one solution, one by one otherwise:
+
+        * a ball in a corner meets both walls at once (pairwise, an acute corner at k = 0 passed the velocity
+          between them 3,499 times, into denormals, and the ball left the table);
+        * a hit riding ball presses on its cushion as the impact happens: the pair and the riders' cushions,
+          as under 'impulses' (not in the clean-up after that solution: Hedrih's law on unequal radii leaves
+          pairs approaching there, and they go by the scene's law)."""
+        if contact.kind == "wall":
+            return [c for c in near if c.kind == "wall" and c.i == contact.i]
+        if not cleanup and (self.riding[contact.i] or self.riding[contact.j]):
+            return [contact] + [c for c in near if self.rides(c) and c.i in (contact.i, contact.j)]
+        return [contact]
+
     def overlapping(self, near: list) -> list:
         """The contacts of ``near`` that overlap: an impact was missed. A riding ball is held on its wall's gap
         polynomial, g = 0; for a finite ball in an ellipse that polynomial's zero is off the exact parallel
@@ -662,9 +673,7 @@ class _Run:
         if not speed > self.speed_floor:
             return False
         if contact.kind == "pair":  # round-off is no approach: a law leaving +6.9e-18 was resolved 10,000 times
-            s, o = STATE_PER_BALL * contact.i, STATE_PER_BALL * contact.j
-            scale = abs(self.state[s + 2]) + abs(self.state[s + 3]) + abs(self.state[o + 2]) + abs(self.state[o + 3])
-            return speed > self.round_off * scale
+            return speed > self.round_off * self._speed_scale(contact)
         if contact.kind == "wall" and self.system.ride:  # below it the ball grazes: it settles (settle_riders)
             s = STATE_PER_BALL * contact.i
             vx, vy = self.state[s + 2], self.state[s + 3]
@@ -679,12 +688,16 @@ class _Run:
 
     def beyond_solver(self, contact: Contact) -> bool:
         """The contact approaches faster than a simultaneous solution's tolerance (2^20 ulps of the speeds)."""
-        s = STATE_PER_BALL * contact.i
-        scale = abs(self.state[s + 2]) + abs(self.state[s + 3])
-        if contact.kind == "pair":
-            o = STATE_PER_BALL * contact.j
-            scale = scale + abs(self.state[o + 2]) + abs(self.state[o + 3])
-        return self.geometry.approach(contact, self.state) > self.solver_tolerance * scale
+        return self.geometry.approach(contact, self.state) > self.solver_tolerance * self._speed_scale(contact)
+
+    def _speed_scale(self, contact: Contact) -> object:
+        """|vx| + |vy| of the contact's ball(s): the scale of its approach speed's round-off."""
+        balls = (contact.i,) if contact.kind == "wall" else (contact.i, contact.j)
+        scale = self.zero
+        for b in balls:
+            s = STATE_PER_BALL * b
+            scale = scale + abs(self.state[s + 2]) + abs(self.state[s + 3])
+        return scale
 
     def resolve(self, contact: Contact) -> None:
         before = list(self.state)

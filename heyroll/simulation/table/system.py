@@ -66,10 +66,11 @@ into the cushion). No speed is held (friction changes it). Three events:
 * "grip" (``slide`` cushion model, a rolling rider): rolling along the
   curve turns the spin, which needs the cloth's friction
   (kappa - 1) m |v'| = (kappa - 1) m v^T H v/|grad g| (|v'| = v^2/rho_c);
-  when that exceeds mu m g the ball starts to skid (the driver seeds a slip
-  of 2 SLIP_END toward the table's inside, the direction the saturated
-  friction drives it). The ``rolling`` cushion model keeps a rolling ball
-  rolling by its definition (paper section 7.2).
+  when that exceeds mu m g the ball starts to skid toward the table's
+  inside, the direction the saturated friction drives it (the driver lets
+  it roll on until its slip would be SKID_ONSET and starts the skid with
+  that slip: driver._Run.grip_lost). The ``rolling`` cushion model keeps a
+  rolling ball rolling by its definition (paper section 7.2).
 
 Events (terminal; the driver resolves them): one per ball and wall (the
 boundary's gap polynomial crossing 0 upwards; the constant -1 while the
@@ -214,10 +215,10 @@ def table_system(scene: TableScene, precision: Precision) -> TableSystem:
             pairs[(i, j)] = (len(pars), num(reach))
             # the event 16 ulps of (R_i + R_j)^2 (8 of the distance) inside contact, at the model's precision
             # (in an MPFR run of more bits the shift rounds away, and so does this workaround); the driver
-            # polishes the instant onto the exact root (driver._Run.polish_pair): heyoka 7.13 lost the entry
-            # root of |dc|^2 - D^2 when its exit
-            # root lay exactly on the step's end or midpoint (a ball at x = -0.8 rolling at 1 m/s into one at
-            # rest at 0, t_end = 2: roots 0.6 and 1.0; no impact, the ball passed through: acceptance test)
+            # polishes the instant onto the exact root (driver._Run.polish_pair). heyoka 7.13 lost the entry
+            # root of |dc|^2 - D^2 when its exit root lay exactly on the step's end or midpoint (a ball at
+            # x = -0.8 rolling at 1 m/s into one at rest at 0, t_end = 2: roots 0.6 and 1.0; no impact, the
+            # ball passed through: acceptance test)
             pars.append(num(shifted))
     events = [TableEvent("wall", k, w) for (k, w) in walls]
     events += [TableEvent("pair", i, j) for (i, j) in pairs]
