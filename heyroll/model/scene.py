@@ -105,6 +105,16 @@ class Scene:
         return cached
 
     @property
+    def memo(self) -> dict:
+        """Values the engine derives from this scene, its state included (its start, what its energy
+        can reach), kept with it (simulation.compiled_cache.by_scene); not part of its value."""
+        memo = self.__dict__.get("_memo")
+        if memo is None:
+            memo = {}
+            object.__setattr__(self, "_memo", memo)
+        return memo
+
+    @property
     def constants(self) -> "SceneConstants":
         """Everything of the scene but its state (q, dq, slip), its name and its run settings.
 

@@ -29,7 +29,7 @@ from ..model.scene import Scene
 from ..model.table import is_table
 from .events import CollisionLog, StopRequest, fill_record_modes, mode_events, mode_handlers
 from .resolve.friction import FrictionState, initial_modes
-from .compiled_cache import CompiledCache, by_constants
+from .compiled_cache import CompiledCache, by_constants, by_scene
 from .precision import Precision
 from .result import SimulationResult, Status, passage_table
 from .contact_function import BODY_VALUES, body_function, evaluate
@@ -339,13 +339,18 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                 friction_modes.begin(ta.state.tolist())
                 was = list(friction.modes)
                 spins = friction_modes.spins(ta.state.tolist(), ta.time, was)
-            settled = settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
+            # every body free and none touching: settle would leave the state as set (reduce and
+            # expand are copies then), and the mode starts at full_state
+            idle = (friction_modes is None and system.n_units == len(scene.bodies)
+                    and getattr(settle, "idle", None) is not None and settle.idle(ta.state))
+            settled = idle or settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
             if friction_modes is not None:  # the modes follow the rates collisions at the mode's start left
                 friction_modes.reconcile(ta, ta.state, ta.time)
                 fill_record_modes(log, friction.modes, stream.pair_bodies, was=was, spins=spins)
             if settled:
-                full_state = system.expand(ta.state.tolist())
-                modes[-1] = dataclasses.replace(modes[-1], state=tuple(full_state))
+                if not idle:
+                    full_state = system.expand(ta.state.tolist())
+                    modes[-1] = ModeChange(modes[-1].t, modes[-1].clusters, tuple(full_state), modes[-1].pinned)
                 overlap = _overlap(scene, precision, full_state, "at the start of a mode")
                 if overlap:
                     log.stop.reason, log.stop.message = "overlap", overlap
@@ -632,7 +637,7 @@ class _Start:
     limit: tuple | None  # a body the track cannot hold at the start: (reason, message)
 
 
-@functools.lru_cache(maxsize=64)
+@by_scene
 def _start(scene: Scene, precision: Precision, watch_all_contacts: bool) -> _Start:
     """Everything before a run's first step that depends on the scene alone: computed once per
     scene (a benchmark's repeated runs of one scene skip it)."""
@@ -907,26 +912,31 @@ def _gap_constants(scene: Scene) -> tuple[float, ...]:
     return tuple(float(p.gap_constant()) for p in scene.pairs) if scene.track.linear_gap else (None,) * len(scene.pairs)
 
 
+@by_constants()
+def _overlap_geometry(scene: Scene) -> tuple:
+    """((i, j, gap constant or None) of each pair, each body's domain or None): what _overlap reads,
+    converted once per scene constants (it runs at every mode's start and end)."""
+    return (tuple((p.i, p.j, c) for p, c in zip(scene.pairs, _gap_constants(scene))),
+            tuple((k, d) for k, d in enumerate(scene.domain(k) for k in range(len(scene.bodies))) if d is not None))
+
+
 def _overlap(scene: Scene, precision: Precision, state, where: str) -> str:
     """A message if a pair's gap is below -overlap_tolerance in ``state`` (a full state), else ''."""
-    n = len(scene.bodies)
-    constants = _gap_constants(scene)
-    for p, constant in zip(scene.pairs, constants):
-        if scene.track.linear_gap:
-            gap = float(state[p.j]) - float(state[p.i]) + constant
+    pairs, domains = _overlap_geometry(scene)
+    for i, j, constant in pairs:
+        if constant is not None:
+            gap = float(state[j]) - float(state[i]) + constant
             unit = "rad"
         else:
-            gap = float(scene.gap(p.i, p.j, float(state[p.i]), float(state[p.j])))
+            gap = float(scene.gap(i, j, float(state[i]), float(state[j])))
             unit = "m"
-        if gap < -overlap_tolerance(state[p.j]):
-            return f"bodies {p.i + 1} and {p.j + 1} overlap {where} (gap {gap:.3g} {unit}): a collision was missed"
-    for k in range(n):
-        domain = scene.domain(k)
-        if domain is not None:
-            q = float(state[k])
-            if q < domain[0] - overlap_tolerance(q) or q > domain[1] + overlap_tolerance(q):
-                return (f"body {k + 1} is beyond the end of the track {where} ({scene.coordinate} = {q:.17g}): "
-                        "a limiter impact was missed")
+        if gap < -overlap_tolerance(state[j]):
+            return f"bodies {i + 1} and {j + 1} overlap {where} (gap {gap:.3g} {unit}): a collision was missed"
+    for k, domain in domains:
+        q = float(state[k])
+        if q < domain[0] - overlap_tolerance(q) or q > domain[1] + overlap_tolerance(q):
+            return (f"body {k + 1} is beyond the end of the track {where} ({scene.coordinate} = {q:.17g}): "
+                    "a limiter impact was missed")
     return ""
 
 

@@ -1095,6 +1095,9 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
         return True
 
     settle.lift_gap = lift_gap  # for a gap rising through zero (reopening_check)
+    # settle(s, t, every unit) leaves s as it is and returns True where no pair touches (the band of
+    # touching_elsewhere is the widest settle looks at): the driver skips it at such a mode's start
+    settle.idle = lambda s: not touching_elsewhere(s)
     return settle
 
 

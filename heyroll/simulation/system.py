@@ -48,7 +48,7 @@ import mpmath
 from ..model._numbers import workprec
 from ..model.scene import ContactPair, Scene
 from ..model.tracks import Dynamics
-from .compiled_cache import CompiledCache, HashedKey, by_constants
+from .compiled_cache import CompiledCache, HashedKey, by_constants, by_scene
 from .friction import build_friction, forcing_terms, friction_events, slides
 from .precision import Precision
 
@@ -327,8 +327,10 @@ def link_bodies(system: SceneSystem, link: ContactLink) -> tuple[int, int]:
 
 
 @functools.lru_cache(maxsize=128)
+@functools.lru_cache(maxsize=None)
 def singleton_units(n: int) -> tuple[Unit, ...]:
-    """Every one of n bodies free (one tuple per n: a run's set-up looks its systems up by it)."""
+    """Every one of n bodies free (one tuple per n, its units' hashes computed once: a run's set-up
+    looks its systems up by it)."""
     return singleton_units_of(range(n))
 
 
@@ -408,17 +410,43 @@ class EnergyReach:
     ends: tuple
     pieces: tuple
 
+    @classmethod
+    def interned(cls, pairs: tuple, top_half: tuple, ends: tuple, pieces: tuple) -> "EnergyReach":
+        """One object per value (a scene's systems are looked up by it at every run: an interned
+        reach is hashed once and compared by identity, ~2 us of a new point's set-up, measured)."""
+        key = (pairs, top_half, ends, pieces)
+        made = _REACHES.get(key)
+        if made is None:
+            if len(_REACHES) > 4096:  # a bound on memory; lookups keep working by value
+                _REACHES.clear()
+            made = _REACHES[key] = cls(pairs, top_half, ends, pieces)
+            object.__setattr__(made, "_hash", hash(key))
+        return made
 
-@functools.lru_cache(maxsize=256)
+    def __hash__(self) -> int:
+        cached = self.__dict__.get("_hash")
+        return hash((self.pairs, self.top_half, self.ends, self.pieces)) if cached is None else cached
+
+
+_REACHES: dict = {}
+
+
+@by_scene
 def energy_reach(scene: Scene) -> EnergyReach:
     """The scene's :class:`EnergyReach` (model precision, with a 1e-9 relative margin toward watching)."""
     track, n = scene.track, len(scene.bodies)
     thresholds = _top_half_energies(scene)
     energy = scene.total_energy() if thresholds else None
     top_half = []
+    energy_float = float(energy) if thresholds else None
     for k, body in enumerate(scene.bodies):
         if thresholds:
-            top_half.append(bool(energy >= thresholds[k]))
+            # decided on doubles where they are far apart (correctly rounded, they cannot be wrong then;
+            # a 256-bit comparison costs ~1 us of a new point's set-up), else at model precision
+            threshold, threshold_float = thresholds[k]
+            apart = energy_float - threshold_float
+            margin = 1e-12 * (abs(energy_float) + abs(threshold_float))
+            top_half.append(apart > 0 if abs(apart) > margin else bool(energy >= threshold))
         else:
             # An open track in a fixed plane: where its centre can rise to, can N vanish?
             height = scene.height_bound(k)
@@ -427,18 +455,19 @@ def energy_reach(scene: Scene) -> EnergyReach:
     ends = tuple((_can_reach_end(scene, k, 0), _can_reach_end(scene, k, 1)) if open_track else (True, True)
                  for k in range(n))
     pieces = tuple(piece_of(track, b, q) for b, q in zip(scene.bodies, scene.q)) if open_track else ()
-    return EnergyReach(pairs=tuple(p.reachable for p in scene.pairs), top_half=tuple(top_half), ends=ends,
-                       pieces=pieces)
+    return EnergyReach.interned(tuple(p.reachable for p in scene.pairs), tuple(top_half), ends, pieces)
 
 
 @by_constants()
 def _top_half_energies(scene: Scene) -> tuple:
     """On a fixed circle: the energy each body needs to rise above the horizontal diameter, where the
-    normal force can vanish (W (1 - cos phi) > W), less 1e-9 relative; () where not bounded so."""
+    normal force can vanish (W (1 - cos phi) > W), less 1e-9 relative, each as (model number, its double);
+    () where not bounded so."""
     if not (scene.track.linear_gap and not scene.frame.rotating and scene.forcing is None):
         return ()
     with workprec():
-        return tuple(scene.track.weight_moment(b, scene.g) * (1 - mpmath.mpf(10) ** -9) for b in scene.bodies)
+        energies = [scene.track.weight_moment(b, scene.g) * (1 - mpmath.mpf(10) ** -9) for b in scene.bodies]
+    return tuple((e, float(e)) for e in energies)
 
 
 def _build_system(scene: Scene, precision: Precision, watched, units: tuple, events: bool) -> SceneSystem:
@@ -750,7 +779,8 @@ def track_shape(track, frame) -> tuple:
 
 def piece_of(track, body, q) -> int:
     """The piece of track holding coordinate q (a junction belongs to the piece after it)."""
-    return sum(1 for s in track.junctions(body) if q >= s)
+    junctions = track.junctions(body)
+    return sum(1 for s in junctions if q >= s) if junctions else 0
 
 
 def piece_bounds(track, body, piece: int):
