@@ -251,6 +251,12 @@ class Scene:
                       track_sides=self.track_sides, frame=self.frame, limiter_restitution=self.limiter_restitution,
                       static_friction=self.static_friction, slip=slips, forcing=self.forcing)
         object.__setattr__(scene, "_constants", self.constants)
+        own = self.__dict__.get("_circle_energies")
+        if own:  # the energies of the bodies whose state is unchanged (a sweep varies one or two)
+            kept = {n: e for n, e in own.items() if (qs[n] is self.q[n] or qs[n] == self.q[n])
+                    and (dqs[n] is self.dq[n] or dqs[n] == self.dq[n])}
+            if kept:
+                object.__setattr__(scene, "_circle_energies", kept)
         return scene._with_checked_state(self.pairs)
 
     def _with_checked_state(self, pairs_of=None) -> "Scene":

@@ -452,8 +452,8 @@ def energy_reach(scene: Scene) -> EnergyReach:
             height = scene.height_bound(k)
             top_half.append(height is None or not track.holds_below(body, _with_margin(height)))
     open_track = track.domain(scene.bodies[0]) is not None
-    ends = tuple((_can_reach_end(scene, k, 0), _can_reach_end(scene, k, 1)) if open_track else (True, True)
-                 for k in range(n))
+    ends = tuple((_can_reach_end(scene, k, 0), _can_reach_end(scene, k, 1)) for k in range(n)) if open_track \
+        else ((True, True),) * n
     pieces = tuple(piece_of(track, b, q) for b, q in zip(scene.bodies, scene.q)) if open_track else ()
     return EnergyReach.interned(tuple(p.reachable for p in scene.pairs), tuple(top_half), ends, pieces)
 
