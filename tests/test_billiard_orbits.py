@@ -104,3 +104,74 @@ def test_the_birkhoff_portrait_of_a_dissipative_table_ends_where_each_launch_set
     for run in launches:
         assert run["status"] == "completed" and 5 < len(run["s"]) < 200
         assert abs(run["sin_angle"][-1]) > 0.999 > abs(run["sin_angle"][0])
+
+
+# -- polygonal tables: orbits by their sequences of sides ----------------------------------------------------
+
+RECTANGLE = 'boundary = "rectangle"\nwidth = 3.0\nheight = 2.0'
+ACUTE = 'boundary = "polygon"\nvertices = [[0.0, 0.0], [4.0, 0.0], [1.5, 3.0]]'
+
+
+def orthic_perimeter(corners):
+    """Fagnano's orbit, the orthic triangle of an acute triangle: its perimeter is 2 area / circumradius."""
+    a, b, c = (np.linalg.norm(corners[(k + 1) % 3] - corners[(k + 2) % 3]) for k in range(3))
+    (x0, y0), (x1, y1), (x2, y2) = corners
+    area = abs((x1 - x0) * (y2 - y0) - (y1 - y0) * (x2 - x0)) / 2
+    return 2 * area / (a * b * c / (4 * area))
+
+
+@pytest.mark.parametrize("radius", ["0", "0.1"])
+def test_a_rectangle_has_families_of_parallel_orbits_with_the_unfolded_lengths(radius):
+    """Unfolded, an orbit of a W x H rectangle (W, H of the centre's rectangle) is a straight segment to a
+    lattice point (2 a W, 2 b H): period 2 (a + b) and perimeter 2 sqrt((a W)^2 + (b H)^2), one family of
+    parallel orbits for each (a, b) coprime; those of period n > 4 pass 2n corners (rotation n/2)."""
+    r = float(radius)
+    body = particle(0.3, -0.2, 1, 0.7) if r == 0 else ball("0.3", "-0.2", "1", "0.7", radius=radius)
+    scene = table_scene(RECTANGLE, [body])
+    w, h = 3 - 2 * r, 2 - 2 * r
+    two = periodic_orbits(scene, 2)
+    assert [o.perimeter for o in two] == pytest.approx([2 * w, 2 * h], rel=1e-14)
+    four = periodic_orbits(scene, 4)
+    assert [(o.rotation, o.perimeter) for o in four] == [(1, pytest.approx(2 * math.hypot(w, h), rel=1e-14))]
+    six = periodic_orbits(scene, 6)
+    assert [(o.rotation, o.perimeter) for o in six] == [(3, pytest.approx(2 * math.hypot(2 * w, h), rel=1e-14)),
+                                                        (3, pytest.approx(2 * math.hypot(w, 2 * h), rel=1e-14))]
+    for o in two + four + six:
+        assert (o.kind, o.stability) == ("family", "parabolic") and o.trace == pytest.approx(2, abs=1e-6)
+    assert periodic_orbits(scene, 6, rotation=1) == [] and periodic_orbits(scene, 3) == []
+
+
+@pytest.mark.parametrize("radius", ["0", "0.2"])
+def test_fagnanos_orbit_of_an_acute_triangle_and_the_engine_runs_it(radius):
+    """The only period-3 orbit of an acute triangle is Fagnano's, the orthic triangle of the centre's triangle:
+    the inscribed triangle of least perimeter (kind min), isolated, parabolic with trace -2 (a parallel orbit
+    beside it closes after 6 impacts, mirrored). The engine launched along it hits its vertices in turn."""
+    r = float(radius)
+    body = particle(1.5, 1.0, 1, 0.7) if r == 0 else ball("1.5", "1.0", "1", "0.7", radius=radius)
+    scene = table_scene(ACUTE, [body])
+    (orbit,) = periodic_orbits(scene, 3)
+    corners = scene.boundary.centre_polygon(scene.balls[0].body.radius)
+    assert orbit.perimeter == pytest.approx(orthic_perimeter(corners), rel=1e-13)
+    assert (orbit.kind, orbit.stability, orbit.rotation) == ("min", "parabolic", 1)
+    assert orbit.trace == pytest.approx(-2, abs=1e-6)
+    p0, p1 = orbit.points[0], orbit.points[1]
+    mid, d = (p0 + p1) / 2, (p1 - p0) / np.linalg.norm(p1 - p0)
+    launch = particle(*(repr(float(v)) for v in (*mid, *d))) if r == 0 else \
+        ball(*(repr(float(v)) for v in (*mid, *d)), radius=radius)
+    table = simulate(table_scene(ACUTE, [launch], max_collisions=9), t_end=1e3).collision_table()
+    centres = np.stack([table["x_i"], table["y_i"]], 1)
+    assert np.max(np.abs(centres - np.tile(np.roll(orbit.points, -1, axis=0), (3, 1)))) < 1e-12
+    assert table["t"][3] - table["t"][0] == pytest.approx(orbit.perimeter, rel=1e-13)
+
+
+def test_a_right_triangle_has_no_fagnano_orbit_and_rotations_are_checked(tmp_path):
+    right = 'boundary = "polygon"\nvertices = [[0.0, 0.0], [3.0, 0.0], [0.0, 2.0]]'
+    assert periodic_orbits(table_scene(right, [particle(0.5, 0.5, 1, 0.7)]), 3) == []
+    with pytest.raises(ValueError, match="--rotation"):
+        periodic_orbits(table_scene(ELLIPSE, [particle(0.3, -0.2, 1, 0.7)]), 6, rotation=3)  # gcd on a smooth table
+    path = write(tmp_path, TABLE.replace('boundary = "ellipse"\na = 2.0\nb = 1.0', RECTANGLE))
+    assert RECTANGLE in path.read_text()
+    out = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "billiard", "orbits", str(path),
+                          "--period", "6", "--json"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert [(o["rotation"], o["kind"]) for o in json.loads(out.stdout)] == [(3, "family"), (3, "family")]

@@ -60,17 +60,26 @@ class PeriodicOrbit:
                 "sin_reflection": [float(v) for v in self.sin_reflection]}
 
 
-def periodic_orbits(scene, period: int, rotation: int = 1, ball: int = 1) -> list[PeriodicOrbit]:
-    """Periodic orbits of ``period`` impacts and rotation number ``rotation/period`` for ball ``ball``."""
+def periodic_orbits(scene, period: int, rotation: int | None = None, ball: int = 1) -> list[PeriodicOrbit]:
+    """Periodic orbits of ``period`` impacts and rotation number ``rotation/period`` for ball ``ball``.
+
+    ``rotation`` None: 1 on a smooth table; on a polygon every rotation number (each orbit says its own: a
+    rectangle's orbits of period n > 4 all have n/2, see :func:`_polygon_orbits`)."""
     if not isinstance(period, int) or period < 2:
         raise SceneError("--period", f"must be a whole number >= 2, got {period!r}")
-    if not isinstance(rotation, int) or not 1 <= rotation < period / 2 + (period % 2 == 0) * 0.5 or \
-            np.gcd(rotation, period) != 1:
-        raise SceneError("--rotation", f"must be a whole number p with 1 <= p <= period/2 and gcd(p, period) = 1, "
-                                       f"got {rotation!r}")
+    polygon = hasattr(scene.boundary, "centre_polygon")
+    if rotation is not None and (not isinstance(rotation, int) or not 1 <= rotation <= period // 2
+                                 or (not polygon and np.gcd(rotation, period) != 1)):
+        rule = "1 <= p <= period/2" + ("" if polygon else " and gcd(p, period) = 1")
+        raise SceneError("--rotation", f"must be a whole number p with {rule}, got {rotation!r}")
     if not 1 <= ball <= scene.n_bodies:
         raise SceneError("--ball", f"must be a ball number 1..{scene.n_bodies}, got {ball}")
     radius = scene.balls[ball - 1].body.radius
+    if polygon:
+        rotations = range(1, period // 2 + 1) if rotation is None else (rotation,)
+        found = [o for p in rotations for o in _polygon_orbits(scene, period, p, radius)]
+        return sorted(found, key=lambda o: (o.rotation, -o.perimeter))
+    rotation = 1 if rotation is None else rotation
     curve = _Curve(scene.boundary, radius)
     found: list[np.ndarray] = []
     step = 2 * np.pi * rotation / period
@@ -93,6 +102,126 @@ def periodic_orbits(scene, period: int, rotation: int = 1, ball: int = 1) -> lis
             orbit = dataclasses.replace(orbit, kind="family")
         orbits.append(orbit)
     return sorted(orbits, key=lambda o: -o.perimeter)
+
+
+#: Side sequences tried at most for a polygon's orbits of one period (each a small Newton solve).
+MAX_CODES = 20000
+
+
+def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicOrbit]:
+    """The periodic orbits of a ball's centre in a polygonal table, by their sequences of sides.
+
+    The perimeter of an inscribed n-gon is not smooth where a vertex passes a corner, so the search of
+    the smooth tables does not apply. Each cyclic sequence of n sides (no side twice in a row; one per
+    orbit up to rotation and reversal; none that repeats a shorter one) fixes the sides of the vertices
+    P_k = V_{s_k} + t_k (V_{s_k + 1} - V_{s_k}), and the perimeter is smooth in t: its critical points
+    with every t_k in (0, 1), the chord arriving from inside and leaving inward, are the orbits of that
+    sequence (Birkhoff's variational principle again). Going once round the table passes each of its m
+    corners once, so an orbit of rotation number p/n passes p m corners on its way (counted
+    counter-clockwise from each vertex to the next; p <= n/2, the orbit run the way it turns less): that
+    selects the sequences. Unlike on a smooth table p and n need not be coprime: an orbit of a polygon
+    need not move its vertices round the table monotonically (every orbit of a rectangle of period
+    n > 4 passes 2n corners, rotation n/2). A sequence whose unfolding closes by a translation gives a family of parallel orbits of
+    one perimeter (the Hessian then has a zero eigenvalue): one member stands for it, kind "family";
+    every orbit of a polygon is parabolic (|trace| = 2: the return map is a shear or its mirror image).
+    Fagnano's orbit of an acute triangle, its orthic triangle, is the isolated minimum of period 3.
+    """
+    corners = scene.boundary.centre_polygon(radius)
+    m = len(corners)
+    ends = np.roll(corners, -1, axis=0)
+    edges = ends - corners
+    lengths = np.hypot(*edges.T)
+    normals = np.stack([edges[:, 1], -edges[:, 0]], 1) / lengths[:, None]  # outward (counter-clockwise polygon)
+    codes = _side_codes(m, period, rotation)
+    if len(codes) > MAX_CODES:
+        raise SceneError("--period", f"a {m}-sided table has {len(codes)} side sequences of period {period}: more "
+                                     f"than {MAX_CODES} to search; take a shorter period")
+    starts = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+    orbits = []
+    for code in codes:
+        code = np.array(code)
+
+        def perimeter_gradient(t):
+            points = corners[code] + t[:, None] * edges[code]
+            chords = np.roll(points, -1, axis=0) - points
+            norms = np.linalg.norm(chords, axis=1)
+            u = chords / norms[:, None]
+            return np.sum(edges[code] * (np.roll(u, 1, axis=0) - u), axis=1), points, u, norms
+
+        t = np.full(period, 0.5)
+        for _ in range(50):
+            grad, points, u, norms = perimeter_gradient(t)
+            if not np.all(norms > 1e-12 * lengths.max()):
+                break
+            if np.max(np.abs(grad)) < 1e-14 * lengths.max():
+                break
+            hess = _polygon_hessian(perimeter_gradient, t)
+            t = t + np.linalg.lstsq(hess, -grad, rcond=1e-10)[0]
+        grad, points, u, norms = perimeter_gradient(t)
+        inside = np.all((t > 1e-9) & (t < 1 - 1e-9))
+        # the chord into vertex k comes from inside (toward its side), the one out of it goes inward
+        reflects = np.all(np.sum(normals[code] * np.roll(u, 1, axis=0), axis=1) > 1e-12) and \
+            np.all(np.sum(normals[code] * u, axis=1) < -1e-12)
+        if not (inside and reflects and np.max(np.abs(grad)) < 1e-10 * lengths.max()):
+            continue
+        eig = np.linalg.eigvalsh(_polygon_hessian(perimeter_gradient, t))
+        scale = np.max(np.abs(eig))
+        if np.min(np.abs(eig)) < 1e-7 * scale:
+            kind = "family"
+        else:
+            kind = "min" if np.all(eig > 0) else "max" if np.all(eig < 0) else "minimax"
+        tangents = edges[code] / lengths[code][:, None]
+        trace = return_map_trace(scene, points, u, radius)
+        thetas = 2 * np.pi * (starts[code] + t * lengths[code]) / lengths.sum()
+        orbits.append(PeriodicOrbit(period=period, rotation=rotation, points=points, thetas=thetas,
+                                    perimeter=float(norms.sum()), sin_reflection=np.sum(u * tangents, axis=1),
+                                    kind=kind, trace=trace, stability="parabolic" if abs(abs(trace) - 2) < 1e-6
+                                    else "stable" if abs(trace) < 2 else "unstable"))
+    return sorted(orbits, key=lambda o: -o.perimeter)
+
+
+def _polygon_hessian(perimeter_gradient, t, h=1e-7):
+    n = len(t)
+    hess = np.empty((n, n))
+    for k in range(n):
+        d = np.zeros(n)
+        d[k] = h
+        hess[:, k] = (perimeter_gradient(t + d)[0] - perimeter_gradient(t - d)[0]) / (2 * h)
+    return (hess + hess.T) / 2
+
+
+def _side_codes(m: int, period: int, rotation: int) -> list[tuple]:
+    """Cyclic sequences of ``period`` sides of an m-gon, no side twice in a row, passing rotation * m corners
+    counter-clockwise on their way (or (period - rotation) m: the same orbits run backwards), one per orbit up
+    to rotation and reversal, none a repetition of a shorter one."""
+    codes = []
+    targets = {rotation * m, (period - rotation) * m}
+
+    def extend(code, passed):
+        if len(code) == period:
+            closing = (code[0] - code[-1]) % m
+            if closing and passed + closing in targets and _canonical(code):
+                codes.append(tuple(code))
+            return
+        for side in range(m):
+            step = (side - code[-1]) % m
+            if step and passed + step + (period - len(code) - 1) <= max(targets):
+                extend(code + [side], passed + step)
+
+    for first in range(m):
+        extend([first], 0)
+    return codes
+
+
+def _canonical(code: list) -> bool:
+    """The code is the least of its rotations and reversed rotations, and repeats no shorter code."""
+    n = len(code)
+    variants = [tuple(code[k:] + code[:k]) for k in range(n)]
+    reverse = code[::-1]
+    variants += [tuple(reverse[k:] + reverse[:k]) for k in range(n)]
+    if tuple(code) != min(variants):
+        return False
+    return not any(n % d == 0 and tuple(code) == tuple(code[d:] + code[:d]) for d in range(1, n))
 
 
 class _Curve:

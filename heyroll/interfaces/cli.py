@@ -114,7 +114,8 @@ def build_parser() -> argparse.ArgumentParser:
     orb = bsub.add_parser("orbits", help="periodic orbits of a table scene's ball: perimeter, stability (trace)")
     orb.add_argument("scene", help="table scene file (TOML, track type = \"table\")")
     orb.add_argument("--period", required=True, help="number of cushion impacts per period (>= 2)")
-    orb.add_argument("--rotation", default="1", help="rotation number p of p/period (default 1)")
+    orb.add_argument("--rotation", default=None,
+                     help="rotation number p of p/period (default 1; on a polygonal table every p)")
     orb.add_argument("--ball", default="1", help="which ball's radius sets the curve of its centre (default 1)")
     orb.add_argument("--json", action="store_true", help="print a JSON array of orbits")
     bpo = bsub.add_parser("portrait", help="the Birkhoff map of many launches of one ball, coloured by launch")
@@ -380,19 +381,22 @@ def _billiard_orbits(args) -> int:
     from ..analysis.billiard_orbits import periodic_orbits
 
     period = _collision_count(args.period, "--period")
-    rotation = _collision_count(args.rotation, "--rotation")
+    rotation = None if args.rotation is None else _collision_count(args.rotation, "--rotation")
     ball = _collision_count(args.ball, "--ball")
     scene = _table_scene(args.scene, "orbits")
     orbits = periodic_orbits(scene, period, rotation, ball)
     if args.json:
         print(json.dumps([o.as_dict() for o in orbits], indent=2))
         return EXIT_OK
+    polygon = hasattr(scene.boundary, "centre_polygon")
+    rotations = f"rotation {rotation}/{period}" if rotation is not None else \
+        "every rotation p/period" if polygon else f"rotation 1/{period}"
     print(f"{scene.boundary.describe()}, ball {ball} (R = {float(scene.balls[ball - 1].body.radius):.6g} m): "
-          f"periodic orbits of period {period}, rotation {rotation}/{period}")
-    print(f"{'kind':>8} {'perimeter (m)':>22} {'trace':>22} stability   vertices (centre)")
+          f"periodic orbits of period {period}, {rotations}")
+    print(f"{'kind':>8} {'p':>3} {'perimeter (m)':>22} {'trace':>22} stability   vertices (centre)")
     for o in orbits:
         vertices = " ".join(f"({x:.6f}, {y:.6f})" for x, y in o.points)
-        print(f"{o.kind:>8} {o.perimeter:22.17g} {o.trace:22.15g} {o.stability:<11} {vertices}")
+        print(f"{o.kind:>8} {o.rotation:>3} {o.perimeter:22.17g} {o.trace:22.15g} {o.stability:<11} {vertices}")
     if not orbits:
         print("none found")
     return EXIT_OK
