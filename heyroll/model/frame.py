@@ -28,7 +28,10 @@ class Frame:
     def rotating(self) -> bool:
         # read off omega's mpf tuple (zero has mantissa and exponent 0; inf and nan a special
         # exponent): a mpf comparison cost ~1 us, and every energy of a scene asks this
-        _, mantissa, exponent, _ = self.omega._mpf_
+        exact = getattr(self.omega, "_mpf_", None)
+        if exact is None:  # a Frame built by hand with a Python number
+            return self.omega != 0
+        _, mantissa, exponent, _ = exact
         return bool(mantissa or exponent)
 
 

@@ -628,9 +628,18 @@ class SceneConstants:
     def __hash__(self) -> int:
         return self._hash
 
+    def __reduce__(self):
+        # the values alone, their mpf exactly (see _numbers): the memo holds the engine's derived values (keyed
+        # by its functions), and the hash of text differs between processes
+        return (_constants_from_exact, (exact_state(self.values),))
+
     def __eq__(self, other) -> bool:
         return self is other or (isinstance(other, SceneConstants) and self._hash == other._hash
                                  and self.values == other.values)
+
+
+def _constants_from_exact(values) -> SceneConstants:
+    return SceneConstants.interned(from_exact_state(values))
 
 
 def _finite(value, field):

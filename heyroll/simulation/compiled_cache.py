@@ -7,7 +7,7 @@ shape reuse what was compiled for the first (constants are runtime parameters).
 from __future__ import annotations
 
 import functools
-from collections import OrderedDict
+from collections import OrderedDict, deque
 
 
 class HashedKey:
@@ -74,20 +74,30 @@ def by_constants():
     return decorate
 
 
-def by_scene(f):
+def by_scene(f=None, *, keep: int | None = None):
     """Cache ``f(scene, *args)`` with the scene object itself (its ``memo``), by ``args``: for what
     depends on a scene's state too (a run's start, what its energy can reach). Kept with the scene,
     not in a table keyed by it, so that a sweep's new point pays no hashing of its exact numbers
-    (~5 us a point, measured) and nothing outlives the scenes it was computed for."""
+    (~5 us a point, measured). ``keep``: only the last ``keep`` scenes keep their value (it holds a
+    compiled system: results that keep their scenes must not keep every one of those, review)."""
 
-    @functools.wraps(f)
-    def cached(scene, *args):
-        memo = scene.memo
-        key = (f, args)
-        value = memo.get(key, memo)
-        if value is memo:
-            value = memo[key] = f(scene, *args)
-        return value
+    def decorate(f):
+        recent: deque = deque()
 
-    return cached
+        @functools.wraps(f)
+        def cached(scene, *args):
+            memo = scene.memo
+            key = (f, args)
+            value = memo.get(key, memo)
+            if value is memo:
+                value = memo[key] = f(scene, *args)
+                if keep is not None:
+                    recent.append((scene, key))
+                    while len(recent) > keep:
+                        old, old_key = recent.popleft()
+                        old.memo.pop(old_key, None)
+            return value
 
+        return cached
+
+    return decorate if f is None else decorate(f)

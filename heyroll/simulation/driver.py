@@ -638,7 +638,7 @@ class _Start:
     limit: tuple | None  # a body the track cannot hold at the start: (reason, message)
 
 
-@by_scene
+@by_scene(keep=64)
 def _start(scene: Scene, precision: Precision, watch_all_contacts: bool) -> _Start:
     """Everything before a run's first step that depends on the scene alone: computed once per
     scene (a benchmark's repeated runs of one scene skip it)."""

@@ -21,8 +21,8 @@ from ..result import Status
 from .contacts import Contact, ContactGeometry
 from .resolve import SETTLED, SIMULTANEOUS, Resolver
 from .result import TableResult
-from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, MODE_PARS, MU_G, RIDE_HOLD, RIDE_SPEED2, RIDING,
-                     SKID, SLIDING, SPIN, STATE_PER_BALL, integrator, needs_grip, table_system)
+from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, MODE_PARS, MU_G, P_GI, P_SI, P_WI, RIDE_HOLD,
+                     RIDE_SPEED2, RIDING, SKID, SLIDING, SPIN, STATE_PER_BALL, integrator, needs_grip, table_system)
 
 #: Resolutions of one pair with a riding ball at one instant before it counts as pressed together.
 RIDER_PAIR_REPEATS = 32
@@ -66,7 +66,9 @@ class _Run:
             options["fast_math"] = True
         if opts.tolerance is not None:
             options["tol"] = num(opts.tolerance)
-        self.system = table_system(scene, precision)
+        self.system = self.base_system = table_system(scene, precision)
+        #: the systems of the run by its pressed pairs (() the scene's own: :meth:`switch_system`)
+        self.systems = {(): self.system}
         self.geometry = ContactGeometry(scene, self.system, precision)
         self.resolver = Resolver(scene, precision)
         self.state = [num(v) for b in scene.balls for v in (b.x, b.y, b.vx, b.vy, b.ux, b.uy)]
@@ -127,6 +129,9 @@ class _Run:
         self.lifted: dict = {}
         #: rolling riders past their grip, by ball: the instant their slip reaches SKID_ONSET (:meth:`grip_lost`)
         self.onsets: dict = {}
+        #: per ball, the ball it is pressed together with (:meth:`press`), or None; the pressed pairs (i < j)
+        self.partner: list = [None] * scene.n_bodies
+        self.pressed_pairs: set = set()
         self.skid_onset = num(SKID_ONSET * float(self.geometry.size) / self.system.max_step)
         self.status, self.message = None, ""
         self.fired = None
@@ -146,15 +151,16 @@ class _Run:
         if self.limit == 0:
             self.stop(Status.MAX_COLLISIONS, "max_collisions = 0: nothing integrated")
             return
-        self.ta = ta = integrator(self.scene, self.system, self.precision, self.options, self.state)
-        ta.pars[:] = self.pars
+        self.ta = integrator(self.scene, self.system, self.precision, self.options, self.state)
+        self.ta.pars[:] = self.pars
         # contacts that touch and approach at the start (a ball launched into a touching neighbour)
         self.at_instant(None)
         if self.status is None:
             self.push()
         time_limit, step_limit = hy.taylor_outcome.time_limit, hy.taylor_outcome.step_limit
-        n_events = len(self.system.events)
         while self.status is None:
+            ta = self.ta  # (a pair pressed together or released switches the system: switch_system)
+            n_events = len(self.system.events)
             before = ta.time
             until = min([self.t_end, *self.onsets.values()])
             propagated = ta.propagate_until(until, max_steps=STEP_CHUNK, max_delta_t=self.max_step)
@@ -194,6 +200,12 @@ class _Run:
                 {"roll": self.reroll, "lift": self.lift, "grip": self.grip_lost}[event.kind](event.ball)
                 # the accelerations changed: a pair or cushion touching now may start to close
                 self.at_instant(None)
+            elif event.kind in ("release", "pair_roll", "pair_grip"):
+                # a pressed pair's contact force vanishes, a member's slip ends, a rolling member loses its grip
+                {"release": self.release_event, "pair_roll": self.pair_reroll,
+                 "pair_grip": self.pair_grip_lost}[event.kind](event.ball, event.other)
+                if self.status is None:
+                    self.at_instant(None)
             else:
                 fired = self.fired_contact(event)
                 if fired is None:  # a spurious root of the parallel curve's polynomial: nothing touches
@@ -219,7 +231,9 @@ class _Run:
         out = []
         for k in range(self.scene.n_bodies):
             b = BALL_PARS * k
-            out += [float(self.pars[b + FVX]), float(self.pars[b + FVY])]
+            # (a pressed pair's member: its acceleration now, the figures' parabola of its curve)
+            out += list(self._present_acceleration(k)) if self.partner[k] is not None else \
+                [float(self.pars[b + FVX]), float(self.pars[b + FVY])]
         return out
 
     def tick(self) -> None:
@@ -242,6 +256,9 @@ class _Run:
         d = u/|u| or rolls. Riding: it skids (slides along the cushion, its friction's direction turning with
         the slip) or rolls on the cushion at the speed it has now, held, its grip watched where the cushion
         model needs it."""
+        if self.partner[k] is not None:
+            self._set_pressed_mode(k)
+            return
         b, s = BALL_PARS * k, STATE_PER_BALL * k
         ux, uy = self.state[s + 4], self.state[s + 5]
         zero = self.zero
@@ -296,6 +313,158 @@ class _Run:
             for w in range(self.scene.boundary.n_walls()):
                 on = self.riding[k] and (w == self.ride_wall[k] or w in (self.pinned[k] or ()))
                 self.pars[self.system.ride_flags[(k, w)]] = zero + 1 if on else zero
+
+    def _set_pressed_mode(self, k: int) -> None:
+        """Ball k is pressed together with its partner (:meth:`press`): its own mode parameters are 0 (its
+        friction, with its turning direction, is in its pair's terms: system._pressed_terms) and its pair's
+        say whether it slides, its mobility and whether its grip is watched. A slip under SKID_ONSET/2 ends at
+        once, as a rider's (its direction relaxes too fast to follow: set_mode)."""
+        b, s = BALL_PARS * k, STATE_PER_BALL * k
+        zero = self.zero
+        ux, uy = self.state[s + 4], self.state[s + 5]
+        sliding = ux != zero or uy != zero
+        if sliding and ux * ux + uy * uy < (self.skid_onset / 2) ** 2:
+            self.end_slip(k)
+            self.hold_pair(k)
+            sliding = False
+        self.pars[b:b + MODE_PARS] = [zero] * MODE_PARS
+        if self.system.ride:
+            for w in range(self.scene.boundary.n_walls()):
+                self.pars[self.system.ride_flags[(k, w)]] = zero
+        i, j = sorted((k, self.partner[k]))
+        first, own = self.system.pressed[(i, j)], 0 if k == i else 1
+        self.pars[first + P_SI + own] = zero + 1 if sliding else zero
+        self.pars[first + P_WI + own] = self._mobility(k)
+        grips = not sliding and float(self.pars[b + SPIN]) > 0 and float(self.pars[b + MU_G]) > 0
+        self.pars[first + P_GI + own] = zero + 1 if grips else zero
+
+    def _mobility(self, k: int):
+        """1/m of ball k sliding (a force through its centre leaves its spin), 1/(kappa m) rolling (run type)."""
+        s = STATE_PER_BALL * k
+        if self.state[s + 4] != self.zero or self.state[s + 5] != self.zero:
+            return 1 / self.mass[k]
+        return 1 / (self.mass[k] * (self.spin_inertia[k] + 1))
+
+    # -- balls pressed together -----------------------------------------------------------------
+    def why_not_pressed(self, i: int, j: int) -> str:
+        """'' where balls i and j can be pressed together (:meth:`press`), else why not (one clause)."""
+        for k in (i, j):
+            if self.riding[k]:
+                return f"ball {k + 1} rides the cushion, which turns it into the other"
+            if self.partner[k] is not None:
+                return f"ball {k + 1} is pressed against ball {self.partner[k] + 1} already"
+        return ""
+
+    def press(self, contact: Contact) -> None:
+        """Balls i and j stay pressed together from now on: the limit of their accumulating impacts (k < 1,
+        sliding friction driving them into each other), as a rider's on the cushion. Their normal relative
+        speed (round-off, or a bounce too low to resolve) is removed by an impulse through the centres that
+        keeps the momentum with the mobilities of :meth:`_mobility` (a sliding ball's spin unchanged, a
+        rolling one rolling); one row, law_flag SETTLED, whose energy change is what the rest of the
+        accumulation would dissipate. Then their contact force holds them together (system._pressed_terms)
+        until it vanishes (the release event), an impact on either ends it, or a member needs more friction
+        than the cloth gives."""
+        i, j = contact.i, contact.j
+        before = list(self.state)
+        energy_before = self.energy(before)
+        self._remove_opening(i, j, contact.normal)
+        for k in (i, j):
+            self.onsets.pop(k, None)
+        self.partner[i], self.partner[j] = j, i
+        self.pressed_pairs.add((i, j))
+        self.switch_system()
+        self.record(contact, before, self.state, energy_before, self.energy(self.state), SETTLED)
+
+    def _remove_opening(self, i: int, j: int, normal) -> None:
+        """The impulse through the centres of balls i, j along ``normal`` (from i to j) that leaves them no
+        normal relative speed and keeps their momentum with the mobilities of :meth:`_mobility`."""
+        si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
+        nx, ny = normal
+        wi, wj = self._mobility(i), self._mobility(j)
+        opening = (self.state[sj + 2] - self.state[si + 2]) * nx + (self.state[sj + 3] - self.state[si + 3]) * ny
+        impulse = -opening / (wi + wj)  # along n on j, the opposite on i
+        for k, w, sign in ((i, wi, -1), (j, wj, 1)):
+            s = STATE_PER_BALL * k
+            dvx, dvy = sign * impulse * w * nx, sign * impulse * w * ny
+            self.state[s + 2], self.state[s + 3] = self.state[s + 2] + dvx, self.state[s + 3] + dvy
+            if self.state[s + 4] != self.zero or self.state[s + 5] != self.zero:
+                self.state[s + 4], self.state[s + 5] = self.state[s + 4] + dvx, self.state[s + 5] + dvy
+
+    def hold_pair(self, k: int) -> None:
+        """A member's velocity jumped (its slip ended by friction's impulse at the slip end, :meth:`end_slip`):
+        the contact takes the part of that jump along it, as the cushion does a rider's (else the pair opened or
+        closed at ~1e-13 m/s, seen as an impact where it let go)."""
+        other = self.partner[k]
+        if other is None:
+            return
+        i, j = sorted((k, other))
+        _, normal = self.geometry.pair(i, j, self.state)
+        self._remove_opening(i, j, normal)
+
+    def release(self, i: int, j: int) -> None:
+        """Balls i and j are no longer pressed together: each moves on its own from now (its own mode)."""
+        self.pressed_pairs.discard((min(i, j), max(i, j)))
+        self.partner[i] = self.partner[j] = None
+        self.switch_system()
+        self.set_mode(i)
+        self.set_mode(j)
+
+    def release_balls(self, balls) -> None:
+        """An impact on a pressed ball ends its pair's contact (the impact is resolved as any other; the
+        pair is judged again after it, :meth:`check_pressed_pair`)."""
+        for k in balls:
+            if self.partner[k] is not None:
+                self.release(k, self.partner[k])
+
+    def release_event(self, i: int, j: int) -> None:
+        """The pair's contact force fell to zero: friction no longer drives the balls into each other."""
+        self.release(i, j)
+
+    def pair_reroll(self, k: int, other: int) -> None:
+        """Member k's slip ended: it rolls on, pressed (its mobility now 1/(kappa m)), unless the pair's push
+        has turned (then the pair lets go)."""
+        self.end_slip(k)
+        self.hold_pair(k)
+        self.rerolls += 1
+        self.set_mode(k)
+        if self._pair_push(k, other) >= 0:
+            self.release(k, other)
+
+    def pair_grip_lost(self, k: int, other: int) -> None:
+        s = STATE_PER_BALL * k
+        self.stop(Status.FAILED, f"ball {k + 1}, rolling pressed against ball {other + 1}, would need more of the "
+                                 f"cloth's friction than mu m g to roll on at t = {float(self.t):.17g} s (x = "
+                                 f"{float(self.state[s]):.6g}, y = {float(self.state[s + 1]):.6g}): a pressed ball "
+                                 "pushed into sliding is not modelled")
+
+    def switch_system(self) -> None:
+        """The run's system for its pressed pairs now (compiled once per set of pairs), its parameters the
+        scene's part of the present ones plus each pair's, every member's mode set; a pressed pair's own
+        impact event is off (its parameter -1: |dc|^2 + 1 never crosses zero)."""
+        key = tuple(sorted(self.pressed_pairs))
+        system = self.systems.get(key)
+        if system is None:
+            system = self.systems[key] = table_system(self.scene, self.precision, key)
+        base = self.base_system
+        self.pars = self.pars[:len(base.pars)] + list(system.pars[len(base.pars):])
+        for pair, (index, _) in base.pairs.items():
+            self.pars[index] = self.num(-1) if pair in self.pressed_pairs else base.pars[index]
+        self.system = system
+        for i, j in key:
+            self.set_mode(i)
+            self.set_mode(j)
+        if self.ta is not None:
+            self.ta = integrator(self.scene, system, self.precision, self.options, self.state)
+            self.ta.time = self.t
+            self.ta.pars[:] = self.pars
+
+    def _pair_push(self, i: int, j: int) -> float:
+        """|dv|^2 + dc . (f_j - f_i) of balls i, j (float): negative while friction presses them together."""
+        si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
+        dx, dy = (float(self.state[sj + m] - self.state[si + m]) for m in (0, 1))
+        dvx, dvy = (float(self.state[sj + m] - self.state[si + m]) for m in (2, 3))
+        fi, fj = self._free_acceleration(i), self._free_acceleration(j)
+        return dvx * dvx + dvy * dvy + dx * (fj[0] - fi[0]) + dy * (fj[1] - fi[1])
 
     def end_slip(self, k: int, cushion=None) -> None:
         """End ball k's slip at once, as friction ends a slip: by an impulse against it, v losing (kappa - 1)/kappa
@@ -401,6 +570,7 @@ class _Run:
         """Sliding friction presses ball k into both walls of a corner (the limit of its bounces between
         them): it stops there, the walls taking the friction's push, until its slip ends (set_mode). One row,
         law_flag SETTLED, on the second wall; the velocity's removal keeps the spin (the slip takes it)."""
+        self.release_balls((k,))
         s = STATE_PER_BALL * k
         before = list(self.state)
         energy_before = self.energy(before)
@@ -630,10 +800,14 @@ class _Run:
             return
         if self.system.ride:
             self.settle_corners(near)
+        # cushions first: a ball that settles onto its cushion now is judged as a rider in its pairs (a ball
+        # driven by friction into one riding the cushion was judged against the free ball and went on impact by
+        # impact, 1e-8 s apart)
         for c in near:
             if c.kind == "wall":
                 self.check_cushion_contact(c)
-            else:
+        for c in near:
+            if c.kind == "pair" and self.status is None:
                 self.check_pressed_pair(c)
         # every touching contact but the one that fired (it has its cooldown, system.TableSystem.cooldown)
         # is opened past round-off, resolved now or not: one whose gap starts a step at zero would
@@ -669,6 +843,8 @@ class _Run:
         when the ball is driven into it faster than the grazing limit: slower, the ball settles onto it
         (settle_riders; its normal speed is otherwise round-off: measured, k = 0 met +4.6e-17 again and
         again, 10,000 impacts at one instant)."""
+        if contact.kind == "pair" and self.partner[contact.i] == contact.j:
+            return False  # pressed together: held at contact by its force, never an impact
         speed = self.geometry.approach(contact, self.state)
         if not speed > self.speed_floor:
             return False
@@ -700,6 +876,7 @@ class _Run:
         return scale
 
     def resolve(self, contact: Contact) -> None:
+        self.release_balls((contact.i,) if contact.kind == "wall" else (contact.i, contact.j))
         before = list(self.state)
         energy_before = self.energy(before)
         if contact.kind == "wall":
@@ -727,8 +904,8 @@ class _Run:
         s = STATE_PER_BALL * contact.i
         nx, ny = contact.normal
         step = self.nudge
-        if self.rides(contact):
-            return  # it stays on the cushion's curve; its event is off
+        if self.rides(contact) or (contact.kind == "pair" and self.partner[contact.i] == contact.j):
+            return  # it stays on the cushion's curve (at its partner: pressed together); its event is off
         if contact.kind == "wall":
             _, c = self.system.walls[(contact.i, contact.j)]
             gap = self.scene.boundary.gap
@@ -912,7 +1089,9 @@ class _Run:
         """Ball k's acceleration without its cushion (float): its free sliding one, or, skidding, the cloth's
         friction against its slip now."""
         b, s = BALL_PARS * k, STATE_PER_BALL * k
-        if self.pars[b + SKID] == self.zero:
+        if self.partner[k] is not None and not self.slides(k):
+            return 0.0, 0.0  # a rolling member of a pressed pair: no friction of its own
+        if self.pars[b + SKID] == self.zero and self.partner[k] is None:
             return float(self.pars[b + FVX]), float(self.pars[b + FVY])
         ux, uy = float(self.state[s + 4]), float(self.state[s + 5])
         norm, mu_g = math.hypot(ux, uy), float(self.pars[b + MU_G])
@@ -926,6 +1105,8 @@ class _Run:
         scenes found two sliding balls whose friction drove them together overlapping after their bounces
         accumulated)."""
         i, j = contact.i, contact.j
+        if self.partner[i] == j:
+            return  # pressed together already
         si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
         nx, ny = (float(v) for v in contact.normal)
         vi = float(self.state[si + 2]), float(self.state[si + 3])
@@ -939,20 +1120,29 @@ class _Run:
             return  # two particles: points, nothing to press (and no curvature of their gap to divide by)
         acceleration = (aj[0] - ai[0]) * nx + (aj[1] - ai[1]) * ny + tangential2 / float(reach)
         if acceleration < 0 and opening * opening < 2 * -acceleration * float(self.geometry.touch):
-            self.stop_pressed(contact)
+            if self.why_not_pressed(i, j):
+                self.stop_pressed(contact)
+            else:
+                self.press(contact)
 
     def stop_pressed(self, contact: Contact) -> None:
         i, j = contact.i, contact.j
-        riders = [k + 1 for k in (i, j) if self.riding[k]]
-        why = (f"ball {riders[0]} rides the cushion, which turns it into the other" if riders else
-               "sliding friction drives them together")
-        self.stop(Status.FAILED, f"balls {i + 1} and {j + 1} stay pressed together at t = {float(self.t):.17g} s "
-                                 f"({why}): balls in persistent contact are not modelled")
+        why = self.why_not_pressed(i, j) or "a cushion turns a riding ball into the other"
+        self.stop(Status.FAILED, f"balls {i + 1} and {j + 1} stay pressed together at t = {float(self.t):.17g} s, "
+                                 f"where {why}: not modelled")
 
     def _present_acceleration(self, k: int) -> tuple:
         """Ball k's acceleration now (float): its free one (:meth:`_free_acceleration`) and, riding, the
         cushion's -lambda grad g."""
         ax, ay = self._free_acceleration(k)
+        if self.partner[k] is not None:  # the pair's contact force (system._pressed_terms, without Baumgarte's terms)
+            i, j = sorted((k, self.partner[k]))
+            si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
+            dx, dy = (float(self.state[sj + m] - self.state[si + m]) for m in (0, 1))
+            wi, wj = float(self._mobility(i)), float(self._mobility(j))
+            lam = -self._pair_push(i, j) / ((wi + wj) * (dx * dx + dy * dy))
+            sign, w = (-1, wi) if k == i else (1, wj)
+            return ax + sign * lam * w * dx, ay + sign * lam * w * dy
         if not self.riding[k]:
             return ax, ay
         gx, gy, curvature = self._gap_terms(k)
@@ -968,6 +1158,7 @@ class _Run:
         (the slip changed as v). With ``record`` it is one row of the impact table,
         law_flag SETTLED, whose energy change is what the rest of the accumulation would dissipate.
         """
+        self.release_balls((k,))  # (riding and pressed together at once is not modelled: check_pressed_pair)
         s = STATE_PER_BALL * k
         w = self.ride_wall[k] = self.ride_wall[k] if wall is None else wall
         sliding = self.slides(k)
@@ -1004,6 +1195,7 @@ class _Run:
         self.grip_or_skid(k)
 
     def simultaneous(self, contacts: list) -> None:
+        self.release_balls({c.i for c in contacts} | {c.j for c in contacts if c.kind == "pair"})
         before = list(self.state)
         energy_before = self.energy(before)
         impulses = self.resolver.impulses(self.state, contacts, self.geometry.approach)

@@ -72,6 +72,13 @@ into the cushion). No speed is held (friction changes it). Three events:
   that slip: driver._Run.grip_lost). The ``rolling`` cushion model keeps a
   rolling ball rolling by its definition (paper section 7.2).
 
+Pressed together (two balls that friction keeps driving into each other after an impact with k < 1: the
+limit of their accumulating bounces, as a rider's on the cushion): a system of its own for the run's pressed
+pairs (``table_system(..., pressed)``, compiled when a pair is first pressed), the scene's plus each pair's
+contact force and its events, "release" (the pair's push through 0), "pair_roll" (a sliding member's slip
+falls to its slip end), "pair_grip" (a rolling member would need more than mu m g: the run stops); see
+_pressed_terms.
+
 Events (terminal; the driver resolves them): one per ball and wall (the
 boundary's gap polynomial crossing 0 upwards; the constant -1 while the
 ball rides that cushion), one per pair of balls
@@ -106,6 +113,13 @@ STATE_PER_BALL = 6
 #: Added to |u|^2 under the square root of a skid's friction direction: u = 0 (a frictionless skid, a rider
 #: that rolls) never divides 0 by 0; 2^-1000 is far below any slip the run resolves (SLIP_END^2 ~ 1e-26).
 TINY = 2.0**-1000
+
+#: Parameters of a pressed pair (i, j), appended after the scene's (``TableSystem.pressed``): each member
+#: slides (1) or rolls (0); its translational mobility w = 1/m sliding (the contact force goes through the
+#: centre and leaves the spin), 1/(kappa m) rolling; its grip watched (a rolling member); (R_i + R_j)^2;
+#: Baumgarte's alpha; the slip at which a member's slide ends.
+P_SI, P_SJ, P_WI, P_WJ, P_GI, P_GJ, P_REACH2, P_ALPHA, P_SLIP_END = range(9)
+PRESS_PARS = 9
 
 _INTEGRATORS = CompiledCache(16)
 #: Shift of a pair's contact event inside the contact, in ulps of (R_i + R_j)^2 (system.table_system): off the
@@ -156,6 +170,8 @@ class TableSystem:
     grips: tuple = ()
     #: (ball, wall) -> parameter index of the flag: the ball rides that wall (riding systems)
     ride_flags: dict = None
+    #: pressed pairs (i, j) -> the first of their PRESS_PARS parameters (system.table_system's ``pressed``)
+    pressed: dict = None
 
     @property
     def n_balls(self) -> int:
@@ -186,7 +202,10 @@ def can_ride(scene: TableScene) -> bool:
     return scene.boundary.kind in ("ellipse", "circle") or sliding
 
 
-def table_system(scene: TableScene, precision: Precision) -> TableSystem:
+def table_system(scene: TableScene, precision: Precision, pressed: tuple = ()) -> TableSystem:
+    """The layout of ``scene``'s system; with ``pressed`` (disjoint pairs (i, j), i < j) the same one plus the
+    contact force of each pair pressed together and its events (module docstring), its parameters after the
+    scene's, so that a run switches between the two keeping its parameter vector."""
     num = precision.number
     n = scene.n_bodies
     pars: list = []
@@ -241,10 +260,22 @@ def table_system(scene: TableScene, precision: Precision) -> TableSystem:
         events += [TableEvent("lift", k) for k in range(n) if rolls[k]]
         grips = tuple(rolls[k] and needs_grip(scene, k) for k in range(n))
         events += [TableEvent("grip", k) for k in range(n) if grips[k]]
-    shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown, ride, grips)
+    blocks = {}
+    for i, j in pressed:
+        blocks[(i, j)] = len(pars)
+        with workprec():
+            reach = scene.balls[i].body.radius + scene.balls[j].body.radius
+        block = [num(0)] * PRESS_PARS
+        block[P_REACH2] = num(reach * reach)
+        block[P_ALPHA] = num(1 / crossing)
+        block[P_SLIP_END] = num(2.0**10 * precision.epsilon * _extent_size(scene) / crossing)
+        pars += block
+        events += [TableEvent("release", i, j), TableEvent("pair_roll", i, j), TableEvent("pair_roll", j, i),
+                   TableEvent("pair_grip", i, j), TableEvent("pair_grip", j, i)]
+    shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown, ride, grips, tuple(pressed))
     return TableSystem(events=tuple(events), walls=walls, pairs=pairs, pars=tuple(pars), rolls=rolls, shape=shape,
                        cooldown=cooldown, max_step=crossing, ride=ride, alpha=alpha, slip_end=slip_end, grips=grips,
-                       ride_flags=ride_flags)
+                       ride_flags=ride_flags, pressed=blocks)
 
 
 def _crossing_time(scene: TableScene) -> float:
@@ -295,6 +326,10 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
     par = hy.par
     equations = []
     cushion = {}  # ball -> its cushion terms (riding systems)
+    contact = {}  # member of a pressed pair -> the accelerations of v and u its pair adds
+    press = {(i, j): _pressed_terms(system, i, j, var) for (i, j) in (system.pressed or {})}
+    for (i, j), terms in press.items():
+        contact[i], contact[j] = terms.member_i, terms.member_j
     for k in range(n):
         x, y, vx, vy, ux, uy = var[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
         base = BALL_PARS * k
@@ -304,6 +339,9 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
             terms = cushion[k] = _cushion_terms(scene, system, k, (x, y, vx, vy, ux, uy))
             ax, ay = ax + terms.ax, ay + terms.ay
             bx, by = bx + terms.bx, by + terms.by
+        if k in contact:
+            cax, cay, cbx, cby = contact[k]
+            ax, ay, bx, by = ax + cax, ay + cay, bx + cbx, by + cby
         equations += [(x, vx), (y, vy), (vx, ax), (vy, ay), (ux, bx), (uy, by)]
     positive, negative = hy.event_direction.positive, hy.event_direction.negative
     typed = {"fp_type": options["fp_type"]} if "fp_type" in options else {}
@@ -340,12 +378,27 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
         elif ev.kind == "lift":
             skid = par[BALL_PARS * k + SKID]
             events.append(hy.t_event(skid * cushion[k].pressing + (1. - skid), direction=negative, **typed))
-        else:  # grip
+        elif ev.kind == "grip":
             base = BALL_PARS * k
             armed, terms = par[base + GRIP], cushion[k]
             spin, mu_g = par[base + SPIN], par[base + MU_G]
             excess = spin * spin * terms.curvature * terms.curvature - mu_g * mu_g * terms.gradient2
             events.append(hy.t_event(armed * excess - (1. - armed), direction=positive, **typed))
+        elif ev.kind == "release":  # the pair's push through 0: its contact force vanishes
+            events.append(hy.t_event(press[(k, ev.other)].push, direction=positive, **typed))
+        else:  # pair_roll, pair_grip of member k (ball) of the pair it forms with ev.other
+            key = (min(k, ev.other), max(k, ev.other))
+            terms, first = press[key], system.pressed[key]
+            own = 0 if k == key[0] else 1
+            if ev.kind == "pair_roll":  # a sliding member's slip falls to the slip end: it rolls
+                sliding = par[first + P_SI + own]
+                events.append(hy.t_event(sliding * (terms.slips[own] - par[first + P_SLIP_END]) + (1. - sliding),
+                                         direction=negative, **typed))
+            else:  # a rolling member needs more of the cloth's friction than mu m g to roll on: (kappa - 1) A > mu g
+                base = BALL_PARS * k
+                armed = par[first + P_GI + own]
+                excess = par[base + SPIN] * terms.pushes[own] - par[base + MU_G]
+                events.append(hy.t_event(armed * excess - (1. - armed), direction=positive, **typed))
     big = len(events) > COMPACT_EVENTS or (system.ride and (n > 1 or any(len(v) > 2 for _, v in system.walls.values())))
     if big and "compact_mode" not in options:
         options = dict(options, compact_mode=True)
@@ -400,3 +453,53 @@ def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables) ->
     return _CushionTerms(ax=fx + cx + hold * vx, ay=fy + cy + hold * vy, bx=rate * ux + skid * cx,
                          by=rate * uy + skid * cy, slip=slip, curvature=curvature, pressing=pressing,
                          gradient2=gradient2)
+
+
+@dataclass(frozen=True)
+class _PressedTerms:
+    """A pressed pair's terms (heyoka expressions): each member's added (v', u') as (ax, ay, bx, by), the
+    push |dv|^2 + dc . (f_j - f_i) (negative while the pair is pressed), each member's slip size and the
+    acceleration A = Lambda w |dc| the contact gives it."""
+
+    member_i: tuple
+    member_j: tuple
+    push: object
+    slips: tuple
+    pushes: tuple
+
+
+def _pressed_terms(system: TableSystem, i: int, j: int, var) -> _PressedTerms:
+    """Balls i and j pressed together (the limit of their accumulating impacts, k < 1, as a rider's on a
+    cushion): the centres held at |c_j - c_i| = R_i + R_j by a contact force Lambda dc along dc = c_j - c_i,
+    pushing them apart, a_i = f_i - Lambda w_i dc, a_j = f_j + Lambda w_j dc, with
+
+        Lambda = -(|dv|^2 + dc . (f_j - f_i) + 2 alpha dc . dv + alpha^2 C / 2) / ((w_i + w_j) |dc|^2),
+
+    C = |dc|^2 - (R_i + R_j)^2, which keeps C'' = -2 alpha C' - alpha^2 C (Baumgarte, as on the cushion).
+    f is a sliding member's friction against its slip, -mu g u/|u|, its direction turning with the slip (the
+    contact force goes through the centre: it changes v and u alike, not the spin); a rolling member has none
+    and mobility w = 1/(kappa m). No ball-ball friction. The force does no work (dc . dv = 0 on the contact)."""
+    par = hy.par
+    first = system.pressed[(i, j)]
+    members = []
+    for k, own in ((i, 0), (j, 1)):
+        x, y, vx, vy, ux, uy = var[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
+        sliding = par[first + P_SI + own]
+        slip = hy.sqrt(ux * ux + uy * uy + (1. - sliding) + TINY)
+        base = BALL_PARS * k
+        f = (-sliding * par[base + MU_G] * ux / slip, -sliding * par[base + MU_G] * uy / slip)
+        fu = (-sliding * par[base + MU_G_U] * ux / slip, -sliding * par[base + MU_G_U] * uy / slip)
+        members.append((x, y, vx, vy, sliding, slip, f, fu, par[first + P_WI + own]))
+    (xi, yi, vxi, vyi, si, slip_i, fi, fui, wi), (xj, yj, vxj, vyj, sj, slip_j, fj, fuj, wj) = members
+    dx, dy, dvx, dvy = xj - xi, yj - yi, vxj - vxi, vyj - vyi
+    alpha = par[first + P_ALPHA]
+    push = dvx * dvx + dvy * dvy + dx * (fj[0] - fi[0]) + dy * (fj[1] - fi[1])
+    d2 = dx * dx + dy * dy
+    lam = -(push + 2. * alpha * (dx * dvx + dy * dvy) + alpha * alpha * (d2 - par[first + P_REACH2]) / 2.) / \
+        ((wi + wj) * d2)
+    member_i = (fi[0] - lam * wi * dx, fi[1] - lam * wi * dy, fui[0] - si * lam * wi * dx, fui[1] - si * lam * wi * dy)
+    member_j = (fj[0] + lam * wj * dx, fj[1] + lam * wj * dy, fuj[0] + sj * lam * wj * dx, fuj[1] + sj * lam * wj * dy)
+    distance = hy.sqrt(d2)
+    return _PressedTerms(member_i=member_i, member_j=member_j, push=push, slips=(slip_i, slip_j),
+                         pushes=(lam * wi * distance, lam * wj * distance))
+

@@ -1,0 +1,124 @@
+"""Balls pressed together on the table (issue 14): sliding friction drives two touching balls into each other
+after an impact with k < 1; their bounces accumulate and, in the limit, the pair is held together by a contact
+force until friction lets go (simulation.table.system._pressed_terms, driver._Run.press)."""
+
+from __future__ import annotations
+
+import mpmath
+import numpy as np
+import pytest
+
+from heyroll import Status, simulate
+
+from test_billiards import ball, table_scene
+
+RECTANGLE = 'boundary = "rectangle"\nwidth = 4.0\nheight = 2.0'
+SETTLED = 4
+
+
+def follow_shot(law="newton", k="0", t_end=1.5):
+    """Ball 1 slides with topspin (u = v - R w_y = 2 - 6 = -4 m/s) into ball 2 at rest, head on along x."""
+    striker = dict(ball("-1.0", "0.0", "2.0", "0.0"), wx=0, wy=60)
+    return table_scene(RECTANGLE, [striker, ball("-0.5", "0.0", "0", "0")], law=law, k=k, friction="0.2",
+                       t_end=t_end)
+
+
+def follow_shot_closed_form(t_end):
+    """The head-on follow shot at k = 0, piece by piece (every acceleration constant, equal masses m, kappa 7/5):
+    ball 1 slides into ball 2 (friction mu g forward); the plastic impact leaves both at V = v/2, ball 2 sliding
+    forward (u = V); pressed, the pair's acceleration is (f_1 + f_2)/2 = 0 and the slips close at mu g/(kappa - 1)
+    each; ball 2 rolls first, then the pair accelerates at mu g/(1 + kappa) (ball 2's mobility 1/(kappa m)) until
+    ball 1 rolls too; both roll on together, the contact force gone. Returns (t_impact, t_roll_2, t_roll_1,
+    final x_1, x_2, v)."""
+    with mpmath.workdps(40):
+        mu_g, kappa, r = mpmath.mpf("0.2") * mpmath.mpf("9.81"), mpmath.mpf(7) / 5, mpmath.mpf("0.1")
+        t1 = (-2 + mpmath.sqrt(4 + 4 * (mu_g / 2) * mpmath.mpf("0.3"))) / mu_g  # -1 + 2t + mu g t^2/2 = -0.7
+        v1 = 2 + mu_g * t1
+        u1 = -4 + kappa / (kappa - 1) * mu_g * t1 - v1 / 2  # the impact takes v1/2 from v and u alike
+        v = v1 / 2
+        t2 = t1 + v / (mu_g / (kappa - 1))  # ball 2's slip (u = V) closes at mu g/(kappa - 1)
+        u2 = u1 + mu_g / (kappa - 1) * (t2 - t1)
+        a = mu_g / (1 + kappa)
+        t3 = t2 + -u2 / (kappa / (kappa - 1) * mu_g + a - mu_g)
+        x2 = mpmath.mpf("-0.5") + v * (t2 - t1) + v * (t3 - t2) + a * (t3 - t2) ** 2 / 2
+        v3 = v + a * (t3 - t2)
+        x2 = x2 + v3 * (t_end - t3)
+        return float(t1), float(t2), float(t3), float(x2 - 2 * r), float(x2), float(v3)
+
+
+def test_a_follow_shot_at_k0_is_pressed_together_and_rolls_on_as_the_closed_form():
+    result = simulate(follow_shot())
+    assert result.status is Status.COMPLETED, result.message
+    table = result.collision_table()
+    t1, t2, t3, x1, x2, v = follow_shot_closed_form(1.5)
+    # the impact (Newton's law through the centres: ball 1 slides, flag 3), then the pair pressed together
+    assert list(table["law_flag"]) == [3, SETTLED] and list(table["j"]) == [2, 2]
+    assert table["t"][0] == pytest.approx(t1, rel=1e-15)
+    assert table["energy_after"][1] == pytest.approx(table["energy_before"][1], rel=1e-14)  # nothing left to take
+    state = result.state_final
+    assert state[0] == pytest.approx(x1, rel=1e-12) and state[6] == pytest.approx(x2, rel=1e-12)
+    assert state[2] == pytest.approx(v, rel=1e-12) and state[8] == pytest.approx(v, rel=1e-12)
+    assert list(state[4:6]) == [0.0, 0.0] and list(state[10:12]) == [0.0, 0.0]  # both roll
+    assert result.n_rerolls == 2 and state[1] == state[7] == 0.0
+
+
+def test_the_pressed_pair_lets_go_where_friction_no_longer_drives_it():
+    """k = 0.3: the balls part after a few bounces, one rolling away: the run never stops (was: failed,
+    'stay pressed together'); the energy only falls."""
+    for law in ("newton", "slide", "hedrih"):
+        result = simulate(follow_shot(law=law, k="0.3", t_end=3))
+        assert result.status is Status.COMPLETED, result.message
+        table = result.collision_table()
+        assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
+
+
+def pressed_reference(state, t, mu_g, kappas, masses, reach, dps=25):
+    """The pressed pair's motion (both sliding) by mpmath's Taylor integrator, written here apart from the
+    engine: a_i = f_i - L w_i dc, a_j = f_j + L w_j dc, u' = kappa/(kappa - 1) f + (the contact's part of a),
+    f = -mu g u/|u|, w = 1/m, L = -(|dv|^2 + dc . (f_j - f_i)) / ((w_i + w_j) |dc|^2)."""
+    with mpmath.workdps(dps):
+        mu_g, reach = mpmath.mpf(mu_g), mpmath.mpf(reach)
+        w = [1 / mpmath.mpf(m) for m in masses]
+        kap = [mpmath.mpf(k) for k in kappas]
+
+        def rhs(_t, y):
+            f, a, b = [], [], []
+            for k in range(2):
+                ux, uy = y[6 * k + 4], y[6 * k + 5]
+                norm = mpmath.sqrt(ux * ux + uy * uy)
+                f.append((-mu_g * ux / norm, -mu_g * uy / norm))
+            dx, dy = y[6] - y[0], y[7] - y[1]
+            dvx, dvy = y[8] - y[2], y[9] - y[3]
+            lam = -(dvx ** 2 + dvy ** 2 + dx * (f[1][0] - f[0][0]) + dy * (f[1][1] - f[0][1])) / ((w[0] + w[1]) * (dx * dx + dy * dy))
+            out = []
+            for k, sign in ((0, -1), (1, 1)):
+                cx, cy = sign * lam * w[k] * dx, sign * lam * w[k] * dy
+                out += [y[6 * k + 2], y[6 * k + 3], f[k][0] + cx, f[k][1] + cy,
+                        kap[k] / (kap[k] - 1) * f[k][0] + cx, kap[k] / (kap[k] - 1) * f[k][1] + cy]
+            return out
+
+        solution = mpmath.odefun(rhs, 0, [mpmath.mpf(float(v)) for v in state])
+        return [float(v) for v in solution(mpmath.mpf(t))]
+
+
+def test_an_oblique_pressed_pair_follows_the_reference_and_holds_its_contact():
+    """An oblique follow shot at k = 0 (ball 2 off ball 1's line, ball 1 with side spin): pressed at 0.143 s, the
+    pair turns about each other, both sliding until ~0.4 s. From the engine's state at 0.2 s, the reference
+    integration of the pressed equations over 0.1 s meets the engine's state at 0.3 s; the centres stay
+    R_1 + R_2 apart to round-off; later the pair lets go (friction turns it apart) and the energy only falls."""
+    striker = dict(ball("-1.0", "0.0", "2.0", "0.0"), wx=-20, wy=60)
+    scene = table_scene(RECTANGLE, [striker, ball("-0.5", "0.05", "0", "0")], law="newton", k="0", friction="0.2",
+                        t_end=1.2)
+    at = {t: simulate(scene, t_end=t) for t in (0.2, 0.3, 1.2)}
+    assert all(r.status is Status.COMPLETED for r in at.values())
+    assert at[0.3].n_rerolls == 0 and list(at[0.3].collision_table()["law_flag"]) == [3, SETTLED]
+    reference = pressed_reference(at[0.2].state_final, 0.1, 0.2 * 9.81, ("1.4", "1.4"), ("0.17", "0.17"), "0.2")
+    assert np.max(np.abs(np.array(at[0.3].state_final, float) - reference)) < 4e-15  # measured 8.9e-16
+    for r in (at[0.2], at[0.3]):
+        s = r.state_final
+        assert abs(np.hypot(s[6] - s[0], s[7] - s[1]) - 0.2) < 1e-15
+    s = at[1.2].state_final
+    assert np.hypot(s[6] - s[0], s[7] - s[1]) > 0.2 + 0.1  # let go, and apart
+    table = at[1.2].collision_table()
+    assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
+    assert at[1.2].energy_final < at[0.3].energy_final < at[0.2].energy_final
