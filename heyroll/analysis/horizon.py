@@ -191,6 +191,13 @@ class LyapunovEstimate:
 _CARRIED_SETTINGS = {"friction": "track_friction", "on_inconsistent": "on_inconsistent", "track_sides": "track_sides"}
 
 
+def _same_contact_at_end(rx, ry) -> bool:
+    """Both segments end with the same bodies in persistent contact (k < 1: their impacts accumulated, in
+    numbers that a perturbation changes, into one contact): the segment ends in one mode, comparable."""
+    ends = rx.mode_changes[-1].clusters, ry.mode_changes[-1].clusters
+    return bool(ends[0]) and ends[0] == ends[1]
+
+
 def _scene_at(scene: Scene, state, t_end) -> Scene:
     """``scene`` with a new initial state (pairs recomputed by Scene.make); other settings carried over."""
     import inspect
@@ -295,13 +302,16 @@ def lyapunov_estimate(
                     ry = heyroll.simulate(_scene_at(scene, y, tau), t_end=tau, max_collisions=None, precision=precision)
                 except ValueError:  # a state rebuilt at (a rounding inside) contact: move the segment end
                     rx = ry = None
-                if rx is not None and rx.success and ry.success and rx.n_collisions == ry.n_collisions:
+                if rx is not None and rx.success and ry.success and (
+                        rx.n_collisions == ry.n_collisions or _same_contact_at_end(rx, ry)):
                     break
                 if rx is not None and not rx.success:
                     raise RuntimeError(f"the reference trajectory failed at t = {elapsed:.17g} s: {rx.message}")
                 retries += 1
                 tau *= 0.97
             else:
+                if history:  # the estimate up to here (a last segment that ends at t_end on a collision)
+                    break
                 raise RuntimeError(
                     f"could not place a segment end away from a collision near t = {elapsed:.17g} s "
                     f"after {max_retries} retries"

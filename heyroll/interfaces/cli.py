@@ -176,7 +176,7 @@ def _run(args) -> int:
             import pyarrow.parquet  # noqa: F401  (the parquet sink's writer)
         except ImportError:
             raise BadInput("--table", "parquet needs pyarrow: pip install 'heyroll[parquet]'") from None
-    from .outputs import prepare_run_directory, remove_run_files, table_sink, write_run
+    from .outputs import FiguresInterrupted, prepare_run_directory, remove_run_files, table_sink, write_run
 
     _writable(out)
     prepare_run_directory(out)
@@ -188,7 +188,13 @@ def _run(args) -> int:
                 high_accuracy=args.high_accuracy, tolerance=tolerance, fast_math=args.fast, sink=sink,
                 progress=progress,
             )
-        write_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures, sink=sink)
+        with _sigterm_as_interrupt():
+            write_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures,
+                      sink=sink)
+    except FiguresInterrupted:
+        print(f"{result.status.value}: {result.message}")
+        print(f"interrupted while drawing the figures: {out}/ holds the whole table and summary.json, no figures")
+        return EXIT_INTERRUPTED
     except OSError as exc:
         # A full disk or a directory that went away: no half-written set of outputs.
         try:

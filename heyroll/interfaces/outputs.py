@@ -281,7 +281,32 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
     if figures:
         from .figures import run_figures
 
-        files.update(run_figures(result, out_dir))
+        return _figures_then_summary(run_figures, result, out_dir, scene_source, files, sink)
+    return _write_summary(result, out_dir, scene_source, files, sink)
+
+
+class FiguresInterrupted(KeyboardInterrupt):
+    """Ctrl-C (or SIGTERM) while a run's figures were drawn: its table and summary.json are whole, its figures
+    were dropped (``summary``: what summary.json holds)."""
+
+    def __init__(self, summary: dict):
+        super().__init__("interrupted while drawing the figures")
+        self.summary = summary
+
+
+def _figures_then_summary(draw, result, out_dir: Path, scene_source: str, files: dict, sink) -> dict:
+    """Draw the figures, then write summary.json. Interrupted while drawing: the figures begun are removed (a
+    half-written picture is no output), summary.json is written without them (``"figures": "interrupted"``) and
+    FiguresInterrupted is raised."""
+    before = {p.name for p in out_dir.glob("*.png")}
+    try:
+        files.update(draw(result, out_dir))
+    except KeyboardInterrupt:
+        for path in out_dir.glob("*.png"):
+            if path.name not in before:
+                path.unlink(missing_ok=True)
+        summary = _write_summary(result, out_dir, scene_source, dict(files, figures="interrupted"), sink)
+        raise FiguresInterrupted(summary) from None
     return _write_summary(result, out_dir, scene_source, files, sink)
 
 
@@ -305,7 +330,7 @@ def _write_table_run(result, out_dir: Path, *, scene_source: str, figures: bool,
     if figures:
         from .table_figures import table_figures
 
-        files.update(table_figures(result, out_dir))
+        return _figures_then_summary(table_figures, result, out_dir, scene_source, files, sink)
     return _write_summary(result, out_dir, scene_source, files, sink)
 
 

@@ -38,7 +38,8 @@ TABLE_TRACK_KEYS = {"type", "boundary", "cushion_model", "cushion_restitution", 
     key for keys in BOUNDARY_KEYS.values() for key in keys}
 TABLE_BODY_KEYS = {"shape", "kappa", "radius", "mass", "density", "x", "y", "vx", "vy", "wx", "wy"}
 TABLE_COLLISION_KEYS = {"law", "restitution", "simultaneous"}
-TABLE_TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run"}
+#: ("sweep": the [sweep] table of `heyroll sweep`, as in scene_file.TOP_KEYS: `run` ignores it)
+TABLE_TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "sweep"}
 
 
 def table_scene_from_dict(data: dict, name: str) -> TableScene:
@@ -92,7 +93,7 @@ def _boundary(track: dict):
     for other, keys in BOUNDARY_KEYS.items():
         for key in keys:
             if key in track and key not in BOUNDARY_KEYS[kind]:
-                raise SceneError(f"track.{key}", f"not a key of a {kind} boundary (it takes "
+                raise SceneError(f"track.{key}", f"not a key of {'an' if kind[0] in 'aeiou' else 'a'} {kind} boundary (it takes "
                                                  f"{', '.join(BOUNDARY_KEYS[kind])})")
     if kind == "polygon":
         vertices = track.get("vertices")

@@ -219,11 +219,11 @@ def build_collision_table(
                                       before[rows, nb + j], number)
     table["law_impulse"], table["law_energy_change"] = impulse, change
     table["law_flag"] = 0 if flags is None else flags
-    if flags is not None and scene.rough:  # (flag 3: not the scene's law; its quantities do not apply)
-        slipped = np.asarray(flags) == 3
-        if slipped.any():
-            table["law_impulse"][slipped] = number(float("nan"))
-            table["law_energy_change"][slipped] = number(float("nan"))
+    if flags is not None:  # rows another law resolved (flags 1-3): the scene's law's quantities do not apply
+        other = np.asarray(flags) != 0
+        if other.any():
+            table["law_impulse"][other] = number(float("nan"))
+            table["law_energy_change"][other] = number(float("nan"))
     return table
 
 

@@ -431,6 +431,8 @@ def _whole(value, flag: str, *, minimum: int, what: str) -> int:
         n = value
     elif isinstance(value, str) and value.strip().isdigit():
         n = int(value)
+    if value is None:
+        raise SweepError(flag, f"{what} is missing: give a whole number >= {minimum}")
     if n is None or n < minimum:
         raise SweepError(flag, f"{what} must be a whole number >= {minimum}, got {value!r}")
     return n

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import signal
 import sys
 from collections import Counter
 from dataclasses import dataclass
@@ -198,9 +199,13 @@ def _executor(chunks: int, workers, scheduler, client):
             else:
                 import logging
 
-                cluster = stack.enter_context(LocalCluster(
-                    n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                    dashboard_address=":0", silence_logs=logging.ERROR))
+                # The workers start with Ctrl-C ignored (a terminal's Ctrl-C reaches the whole process group):
+                # this process stops the sweep and closes the cluster; each worker printed its own traceback
+                # of the interruption (review)
+                with _sigint_ignored():
+                    cluster = stack.enter_context(LocalCluster(
+                        n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                        dashboard_address=":0", silence_logs=logging.ERROR))
                 client = stack.enter_context(Client(cluster))
 
         def submit(plan: SweepPlan, pending: list):
@@ -212,6 +217,20 @@ def _executor(chunks: int, workers, scheduler, client):
                 yield region, count, future.result()
 
         yield submit, client.dashboard_link
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """SIGINT ignored while processes are started here (they keep it ignored); restored after."""
+    try:
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager

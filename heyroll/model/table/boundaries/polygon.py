@@ -35,8 +35,8 @@ class PolygonBoundary:
         if len(verts) < 3:
             raise SceneError(field, f"a polygon needs at least 3 vertices, got {len(verts)}")
         with workprec():
-            if signed_area(verts) < 0:
-                verts = verts[::-1]
+            if signed_area(verts) < 0:  # counter-clockwise from the same first vertex (boundary_s starts there)
+                verts = verts[:1] + verts[:0:-1]
             n = len(verts)
             for k in range(n):
                 (x0, y0), (x1, y1), (x2, y2) = verts[k - 1], verts[k], verts[(k + 1) % n]
