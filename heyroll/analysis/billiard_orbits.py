@@ -180,14 +180,8 @@ def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicO
     return sorted(orbits, key=lambda o: -o.perimeter)
 
 
-def _polygon_hessian(perimeter_gradient, t, h=1e-7):
-    n = len(t)
-    hess = np.empty((n, n))
-    for k in range(n):
-        d = np.zeros(n)
-        d[k] = h
-        hess[:, k] = (perimeter_gradient(t + d)[0] - perimeter_gradient(t - d)[0]) / (2 * h)
-    return (hess + hess.T) / 2
+def _polygon_hessian(perimeter_gradient, t):
+    return _central_hessian(lambda x: perimeter_gradient(x)[0], t, 1e-7)
 
 
 def _side_codes(m: int, period: int, rotation: int) -> list[tuple]:
@@ -240,13 +234,18 @@ def _gradient(curve, thetas):
     return np.sum(tangents * (np.roll(e, 1, axis=0) - e), axis=1), np.linalg.norm(chords, axis=1).sum()
 
 
-def _hessian(curve, thetas, h=1e-6):
-    n = len(thetas)
+def _hessian(curve, thetas):
+    return _central_hessian(lambda x: _gradient(curve, x)[0], thetas, 1e-6)
+
+
+def _central_hessian(gradient, x, h: float):
+    """The Hessian of a function by central differences of its ``gradient``, symmetrized."""
+    n = len(x)
     hess = np.empty((n, n))
     for k in range(n):
         d = np.zeros(n)
         d[k] = h
-        hess[:, k] = (_gradient(curve, thetas + d)[0] - _gradient(curve, thetas - d)[0]) / (2 * h)
+        hess[:, k] = (gradient(x + d) - gradient(x - d)) / (2 * h)
     return (hess + hess.T) / 2
 
 

@@ -18,7 +18,7 @@ from pathlib import Path
 from ..errors import SceneError
 from ..model.scene import Scene
 from ..model.table import is_table
-from ..simulation.driver import simulate
+from ..simulation.driver import signal_handled, simulate
 from ..simulation.precision import Precision
 from .scene_file import default_scene, default_scene_text, load_scene
 
@@ -275,22 +275,13 @@ def _progress_bar(mode: str, scene, t_end):
         bar.close()
 
 
-@contextlib.contextmanager
 def _sigterm_as_interrupt():
     """SIGTERM ends a run like Ctrl-C: the table up to the last collision, status interrupted."""
 
     def handler(signum, frame):
         raise KeyboardInterrupt
 
-    try:
-        previous = signal.signal(signal.SIGTERM, handler)
-    except ValueError:  # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+    return signal_handled(signal.SIGTERM, handler)
 
 
 def _max_events(text):

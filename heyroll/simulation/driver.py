@@ -835,6 +835,21 @@ class _Stream:
 
 
 @contextlib.contextmanager
+def signal_handled(signum, handler):
+    """``handler`` for signal ``signum`` during the block, the previous one after (main thread only: elsewhere
+    the block runs with the handlers as they are)."""
+    try:
+        previous = signal.signal(signum, handler)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signum, previous)
+
+
+@contextlib.contextmanager
 def signals_deferred():
     """SIGINT and SIGTERM wait until the block ends, then go to their handlers (main thread only)."""
     if threading.current_thread() is not threading.main_thread():

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..interfaces.outputs import writable_problem
-from ..simulation.driver import signals_deferred
+from ..simulation.driver import signal_handled, signals_deferred
 from .errors import SchedulerError, SweepError
 from .plan import SweepPlan, make_plan
 from .points import Chunk, run_chunk
@@ -202,7 +202,7 @@ def _executor(chunks: int, workers, scheduler, client):
                 # The workers start with Ctrl-C ignored (a terminal's Ctrl-C reaches the whole process group):
                 # this process stops the sweep and closes the cluster; each worker printed its own traceback
                 # of the interruption (review)
-                with _sigint_ignored():
+                with signal_handled(signal.SIGINT, signal.SIG_IGN):
                     cluster = stack.enter_context(LocalCluster(
                         n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
                         dashboard_address=":0", silence_logs=logging.ERROR))
@@ -217,20 +217,6 @@ def _executor(chunks: int, workers, scheduler, client):
                 yield region, count, future.result()
 
         yield submit, client.dashboard_link
-
-
-@contextlib.contextmanager
-def _sigint_ignored():
-    """SIGINT ignored while processes are started here (they keep it ignored); restored after."""
-    try:
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:  # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager
