@@ -136,6 +136,9 @@ class _Run:
         #: per ball, the ball it is pressed together with (:meth:`press`), or None; the pressed pairs (i < j)
         self.partner: list = [None] * scene.n_bodies
         self.pressed_pairs: set = set()
+        #: the instant each pair last let go (it is not pressed again at that instant: its push is zero to
+        #: round-off there, and pressed again it let go again at once, for ever, or was held by a pull: review)
+        self.let_go: dict = {}
         self.skid_onset = num(SKID_ONSET * float(self.geometry.size) / self.system.max_step)
         self.status, self.message = None, ""
         self.fired = None
@@ -409,6 +412,7 @@ class _Run:
     def release(self, i: int, j: int) -> None:
         """Balls i and j are no longer pressed together: each moves on its own from now (its own mode)."""
         self.pressed_pairs.discard((min(i, j), max(i, j)))
+        self.let_go[(min(i, j), max(i, j))] = self.t
         self.partner[i] = self.partner[j] = None
         self.switch_system()
         self.set_mode(i)
@@ -1165,8 +1169,8 @@ class _Run:
         scenes found two sliding balls whose friction drove them together overlapping after their bounces
         accumulated)."""
         i, j = contact.i, contact.j
-        if self.partner[i] == j:
-            return  # pressed together already
+        if self.partner[i] == j or self.let_go.get((i, j)) == self.t:
+            return  # pressed together already, or let go at this very instant
         si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
         nx, ny = (float(v) for v in contact.normal)
         vi = float(self.state[si + 2]), float(self.state[si + 3])

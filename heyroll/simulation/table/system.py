@@ -267,10 +267,11 @@ def table_system(scene: TableScene, precision: Precision, pressed: tuple = ()) -
     blocks = {}
     for i, j in pressed:
         blocks[(i, j)] = len(pars)
-        with workprec():
-            reach = scene.balls[i].body.radius + scene.balls[j].body.radius
+        with workprec():  # (R_i + R_j)^2 at the model's precision (at mpmath's global 53 bits a quad run held
+            reach = scene.balls[i].body.radius + scene.balls[j].body.radius  # the pair 8e-19 too far: overlap)
+            reach2 = reach * reach
         block = [num(0)] * PRESS_PARS
-        block[P_REACH2] = num(reach * reach)
+        block[P_REACH2] = num(reach2)
         block[P_ALPHA] = num(1 / crossing)
         block[P_SLIP_END] = num(2.0**10 * precision.epsilon * _extent_size(scene) / crossing)
         pars += block
