@@ -270,7 +270,8 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
     num = precision.number
     friction = FrictionState(scene, precision, initial_modes(scene), [num(w) for w in scene.slip]) \
         if scene.rough else None
-    stream.friction, stream.pair_bodies = friction, [(p.i, p.j) for p in scene.pairs]
+    stream.friction = friction  # (and the pairs' bodies, for the friction modes of its records)
+    stream.pair_bodies = [(p.i, p.j) for p in scene.pairs] if friction is not None else None
     try:
         start = _start(scene, precision, watch_all_contacts)
     except KeyboardInterrupt:  # while the first mode compiles: nothing integrated, outputs still whole
@@ -317,7 +318,8 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             ta.pars[:] = params[: len(ta.pars)]  # heyoka keeps those up to the last one used
             if system.per_body and (system.links or any(u.pinned for u in units)):
                 full_state = project_onto_contacts(system, full_state, params)
-            ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra
+            ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra if system.n_extra or \
+                system.n_units != len(scene.bodies) else full_state
             ta.dtime = t
             if slots:
                 ta.reset_cooldowns()
