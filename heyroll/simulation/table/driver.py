@@ -409,10 +409,13 @@ class _Run:
         _, normal = self.geometry.pair(i, j, self.state)
         self._remove_opening(i, j, normal)
 
-    def release(self, i: int, j: int) -> None:
-        """Balls i and j are no longer pressed together: each moves on its own from now (its own mode)."""
+    def release(self, i: int, j: int, let_go: bool = False) -> None:
+        """Balls i and j are no longer pressed together: each moves on its own from now (its own mode).
+        ``let_go``: their push has turned (not an impact on one of them, after which they may be pressed again at
+        once: kept apart from that, such a pair closed unseen, random scenes)."""
         self.pressed_pairs.discard((min(i, j), max(i, j)))
-        self.let_go[(min(i, j), max(i, j))] = self.t
+        if let_go:
+            self.let_go[(min(i, j), max(i, j))] = self.t
         self.partner[i] = self.partner[j] = None
         self.switch_system()
         self.set_mode(i)
@@ -427,7 +430,7 @@ class _Run:
 
     def release_event(self, i: int, j: int) -> None:
         """The pair's contact force fell to zero: friction no longer drives the balls into each other."""
-        self.release(i, j)
+        self.release(i, j, let_go=True)
 
     def pair_reroll(self, k: int, other: int) -> None:
         """Member k's slip ended: it rolls on, pressed (its mobility now 1/(kappa m)), unless the pair's push
@@ -437,7 +440,7 @@ class _Run:
         self.rerolls += 1
         self.set_mode(k)
         if self._pair_push(k, other) >= 0:
-            self.release(k, other)
+            self.release(k, other, let_go=True)
 
     def pair_grip_lost(self, k: int, other: int) -> None:
         s = STATE_PER_BALL * k
