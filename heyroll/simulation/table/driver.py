@@ -975,12 +975,14 @@ class _Run:
             _, c = self.system.walls[(contact.i, contact.j)]
             gap = self.scene.boundary.gap
             margin = self.round_off * self.scene.boundary.gap_scale(contact.j, c)
+            x0, y0 = self.state[s], self.state[s + 1]
             for _ in range(LEAVE_DOUBLINGS):  # at most ~2^20 ulps in all: never past the overlap guard's reach
                 if gap(contact.j, self.state[s], self.state[s + 1], c) < -margin:
-                    return
+                    break
                 self.state[s] = self.state[s] - step * nx
                 self.state[s + 1] = self.state[s + 1] - step * ny
                 step = step * 2
+            self._carry(contact.i, self.state[s] - x0, self.state[s + 1] - y0)
             return
         o = STATE_PER_BALL * contact.j
         _, reach = self.system.pairs[(contact.i, contact.j)]
@@ -993,6 +995,29 @@ class _Run:
             self.state[s], self.state[s + 1] = self.state[s] - step * nx, self.state[s + 1] - step * ny
             self.state[o], self.state[o + 1] = self.state[o] + step * nx, self.state[o + 1] + step * ny
             step = step * 2
+
+    def _carry(self, k: int, dx, dy) -> None:
+        """Ball k was moved by (dx, dy) off its cushion (leave): a ball it touches and now overlaps beyond
+        round-off moves with it, and so on along a row (opening a cushion contact moved a ball 4.7e-10 m into its
+        neighbour, and that pair, overlapping from the start of a step, closed unseen: fuzz review)."""
+        if dx == self.zero and dy == self.zero:
+            return
+        moved, queue = {k}, [k]
+        while queue:
+            a = queue.pop()
+            for b in range(self.scene.n_bodies):
+                if b in moved or self.partner[a] == b:
+                    continue
+                _, reach = self.system.pairs[(min(a, b), max(a, b))]
+                sa, sb = STATE_PER_BALL * a, STATE_PER_BALL * b
+                ex, ey = self.state[sb] - self.state[sa], self.state[sb + 1] - self.state[sa + 1]
+                now = ex * ex + ey * ey - reach * reach  # and before a moved: (e + d)^2 - reach^2
+                before = (ex + dx) * (ex + dx) + (ey + dy) * (ey + dy) - reach * reach
+                if not (now < before and now < -self.round_off * (reach * reach + reach * self.geometry.size)):
+                    continue
+                self.state[sb], self.state[sb + 1] = self.state[sb] + dx, self.state[sb + 1] + dy
+                moved.add(b)
+                queue.append(b)
 
     def check_cushion_contact(self, contact: Contact) -> None:
         """A ball that stays on a cushion: settled where it can ride it; else the run stops, saying why.
