@@ -124,7 +124,7 @@ def orthic_perimeter(corners):
 def test_a_rectangle_has_families_of_parallel_orbits_with_the_unfolded_lengths(radius):
     """Unfolded, an orbit of a W x H rectangle (W, H of the centre's rectangle) is a straight segment to a
     lattice point (2 a W, 2 b H): period 2 (a + b) and perimeter 2 sqrt((a W)^2 + (b H)^2), one family of
-    parallel orbits for each (a, b) coprime; those of period n > 4 pass 2n corners (rotation n/2)."""
+    parallel orbits for each (a, b) coprime; those of period 6 pass 12 corners (rotation 3)."""
     r = float(radius)
     body = particle(0.3, -0.2, 1, 0.7) if r == 0 else ball("0.3", "-0.2", "1", "0.7", radius=radius)
     scene = table_scene(RECTANGLE, [body])
@@ -175,3 +175,15 @@ def test_a_right_triangle_has_no_fagnano_orbit_and_rotations_are_checked(tmp_pat
                           "--period", "6", "--json"], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert [(o["rotation"], o["kind"]) for o in json.loads(out.stdout)] == [(3, "family"), (3, "family")]
+
+
+def test_a_family_whose_newton_start_diverges_is_found_and_long_periods_are_refused():
+    """A 4 x 2 rectangle, period 6: the (2, 1) family's side sequence sent undamped Newton steps from the sides'
+    middles to t ~ 1e9 (acceptance test: only the (1, 2) family was listed); period 100000 ended in a
+    RecursionError, period 10 ran for minutes."""
+    scene = table_scene('boundary = "rectangle"\nwidth = 4.0\nheight = 2.0', [particle(0.3, -0.2, 1, 0.7)])
+    assert [o.perimeter for o in periodic_orbits(scene, 6)] == pytest.approx([2 * math.hypot(8, 2),
+                                                                              2 * math.hypot(4, 4)], rel=1e-13)
+    for period in (9, 100000):
+        with pytest.raises(ValueError, match="--period"):
+            periodic_orbits(scene, period)

@@ -215,3 +215,14 @@ def test_a_ball_moved_off_its_cushion_carries_the_ball_it_touches():
     result = simulate(parse_scene(text), max_collisions=2000)
     assert result.status is Status.COMPLETED, result.message
     assert rows_gain(result) < 1e-14
+
+
+def test_newton_and_slide_laws_at_k0_never_fall_back():
+    """Newton's law at k = 0 leaves the pair at one normal speed; its round-off (+1e-17 m/s) was taken for the
+    law leaving them approaching, and the row marked law_flag 1 (a fallback no law but Hedrih's has)."""
+    for law in ("newton", "slide"):
+        striker = dict(ball("-1.0", "0.0", "2.0", "0.0"), wx=0, wy=60)
+        result = simulate(table_scene('boundary = "rectangle"\nwidth = 4.0\nheight = 2.0',
+                                      [striker, ball("-0.5", "0.05", "0", "0")], law=law, k="0", friction="0.2",
+                                      cushion_k="0.9", t_end=8))
+        assert 1 not in list(result.collision_table()["law_flag"])

@@ -64,7 +64,7 @@ def periodic_orbits(scene, period: int, rotation: int | None = None, ball: int =
     """Periodic orbits of ``period`` impacts and rotation number ``rotation/period`` for ball ``ball``.
 
     ``rotation`` None: 1 on a smooth table; on a polygon every rotation number (each orbit says its own: a
-    rectangle's orbits of period n > 4 all have n/2, see :func:`_polygon_orbits`)."""
+    rectangle's orbits of period 6 have 3, see :func:`_polygon_orbits`)."""
     if not isinstance(period, int) or period < 2:
         raise SceneError("--period", f"must be a whole number >= 2, got {period!r}")
     polygon = hasattr(scene.boundary, "centre_polygon")
@@ -104,8 +104,12 @@ def periodic_orbits(scene, period: int, rotation: int | None = None, ball: int =
     return sorted(orbits, key=lambda o: -o.perimeter)
 
 
-#: Side sequences tried at most for a polygon's orbits of one period (each a small Newton solve).
-MAX_CODES = 20000
+#: Side sequences tried at most for a polygon's orbits of one period (each a small Newton solve), and the
+#: longest period searched there.
+MAX_CODES = 5000
+MAX_POLYGON_PERIOD = 8
+#: Starts of Newton's method per side sequence: the middle of every side, then seeded random ones.
+POLYGON_STARTS = 4
 
 
 def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicOrbit]:
@@ -120,12 +124,18 @@ def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicO
     corners once, so an orbit of rotation number p/n passes p m corners on its way (counted
     counter-clockwise from each vertex to the next; p <= n/2, the orbit run the way it turns less): that
     selects the sequences. Unlike on a smooth table p and n need not be coprime: an orbit of a polygon
-    need not move its vertices round the table monotonically (every orbit of a rectangle of period
-    n > 4 passes 2n corners, rotation n/2). A sequence whose unfolding closes by a translation gives a family of parallel orbits of
+    need not move its vertices round the table monotonically (a rectangle's orbits of period 6 pass 12
+    corners, rotation 3). Newton's method starts from the middle of every side and from seeded random
+    points (POLYGON_STARTS), its steps damped; periods up to MAX_POLYGON_PERIOD are searched (the
+    sequences grow as (m - 1)^n, and a family's sequence can still be missed: a 4 x 2 rectangle's
+    (3, 1) family of period 8 is). A sequence whose unfolding closes by a translation gives a family of parallel orbits of
     one perimeter (the Hessian then has a zero eigenvalue): one member stands for it, kind "family";
     every orbit of a polygon is parabolic (|trace| = 2: the return map is a shear or its mirror image).
     Fagnano's orbit of an acute triangle, its orthic triangle, is the isolated minimum of period 3.
     """
+    if period > MAX_POLYGON_PERIOD:
+        raise SceneError("--period", f"on a polygonal table at most {MAX_POLYGON_PERIOD} (its orbits are searched by "
+                                     f"their sequences of sides), got {period}")
     corners = scene.boundary.centre_polygon(radius)
     m = len(corners)
     ends = np.roll(corners, -1, axis=0)
@@ -133,9 +143,9 @@ def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicO
     lengths = np.hypot(*edges.T)
     normals = np.stack([edges[:, 1], -edges[:, 0]], 1) / lengths[:, None]  # outward (counter-clockwise polygon)
     codes = _side_codes(m, period, rotation)
-    if len(codes) > MAX_CODES:
-        raise SceneError("--period", f"a {m}-sided table has {len(codes)} side sequences of period {period}: more "
-                                     f"than {MAX_CODES} to search; take a shorter period")
+    if codes is None:
+        raise SceneError("--period", f"a {m}-sided table has more than {MAX_CODES} side sequences of period {period} "
+                                     f"to search; take a shorter period")
     starts = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
     orbits = []
     for code in codes:
@@ -148,21 +158,20 @@ def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicO
             u = chords / norms[:, None]
             return np.sum(edges[code] * (np.roll(u, 1, axis=0) - u), axis=1), points, u, norms
 
-        t = np.full(period, 0.5)
-        for _ in range(50):
+        rng = np.random.default_rng(0)  # (deterministic: the same orbits every time)
+        for start in [np.full(period, 0.5)] + [rng.uniform(0.2, 0.8, period) for _ in range(POLYGON_STARTS - 1)]:
+            t = _polygon_newton(perimeter_gradient, start, lengths.max())
+            if t is None:
+                continue
+            t = _into_sides(perimeter_gradient, t)
             grad, points, u, norms = perimeter_gradient(t)
-            if not np.all(norms > 1e-12 * lengths.max()):
+            inside = np.all((t > 1e-9) & (t < 1 - 1e-9))
+            # the chord into vertex k comes from inside (toward its side), the one out of it goes inward
+            reflects = np.all(np.sum(normals[code] * np.roll(u, 1, axis=0), axis=1) > 1e-12) and \
+                np.all(np.sum(normals[code] * u, axis=1) < -1e-12)
+            if inside and reflects and np.max(np.abs(grad)) < 1e-10 * lengths.max():
                 break
-            if np.max(np.abs(grad)) < 1e-14 * lengths.max():
-                break
-            hess = _polygon_hessian(perimeter_gradient, t)
-            t = t + np.linalg.lstsq(hess, -grad, rcond=1e-10)[0]
-        grad, points, u, norms = perimeter_gradient(t)
-        inside = np.all((t > 1e-9) & (t < 1 - 1e-9))
-        # the chord into vertex k comes from inside (toward its side), the one out of it goes inward
-        reflects = np.all(np.sum(normals[code] * np.roll(u, 1, axis=0), axis=1) > 1e-12) and \
-            np.all(np.sum(normals[code] * u, axis=1) < -1e-12)
-        if not (inside and reflects and np.max(np.abs(grad)) < 1e-10 * lengths.max()):
+        else:
             continue
         eig = np.linalg.eigvalsh(_polygon_hessian(perimeter_gradient, t))
         scale = np.max(np.abs(eig))
@@ -180,6 +189,40 @@ def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicO
     return sorted(orbits, key=lambda o: -o.perimeter)
 
 
+def _polygon_newton(perimeter_gradient, t, size: float):
+    """Newton's least-squares steps on the perimeter's gradient from ``t``, each at most a quarter of a side (an
+    undamped start diverged to 1e9 for a rectangle's (2, 1) family); None where it leaves the sides' stretch or
+    does not converge."""
+    for _ in range(40):
+        grad, _points, _u, norms = perimeter_gradient(t)
+        if not np.all(norms > 1e-12 * size) or np.any(t < -0.5) or np.any(t > 1.5):
+            return None
+        if np.max(np.abs(grad)) < 1e-14 * size:
+            return t
+        step = np.linalg.lstsq(_polygon_hessian(perimeter_gradient, t), -grad, rcond=1e-10)[0]
+        t = t + step * min(1.0, 0.25 / max(np.max(np.abs(step)), 1e-300))
+    return t if np.max(np.abs(perimeter_gradient(t)[0])) < 1e-10 * size else None
+
+
+def _into_sides(perimeter_gradient, t):
+    """A critical point of a family (the Hessian singular along the family's direction v) moved along v to the
+    middle of the stretch where every vertex lies inside its side: Newton's least-squares step stops at the member
+    nearest its start, which can lie past a corner (a 4 x 2 rectangle's (2, 1) family of period 6 was missed)."""
+    eig, vec = np.linalg.eigh(_polygon_hessian(perimeter_gradient, t))
+    scale = np.max(np.abs(eig)) if eig.size else 0.0
+    for m in np.flatnonzero(np.abs(eig) < 1e-7 * scale):
+        v = vec[:, m]
+        low, high = -np.inf, np.inf
+        for tk, vk in zip(t, v):
+            if abs(vk) < 1e-12:
+                continue
+            a, b = (1e-6 - tk) / vk, (1 - 1e-6 - tk) / vk
+            low, high = max(low, min(a, b)), min(high, max(a, b))
+        if low < high and np.isfinite(low) and np.isfinite(high):
+            t = t + (low + high) / 2 * v
+    return t
+
+
 def _polygon_hessian(perimeter_gradient, t):
     return _central_hessian(lambda x: perimeter_gradient(x)[0], t, 1e-7)
 
@@ -190,8 +233,12 @@ def _side_codes(m: int, period: int, rotation: int) -> list[tuple]:
     to rotation and reversal, none a repetition of a shorter one."""
     codes = []
     targets = {rotation * m, (period - rotation) * m}
+    visited = [0]
 
     def extend(code, passed):
+        visited[0] += 1
+        if len(codes) > MAX_CODES or visited[0] > 50 * MAX_CODES:
+            return
         if len(code) == period:
             closing = (code[0] - code[-1]) % m
             if closing and passed + closing in targets and _canonical(code):
@@ -204,7 +251,7 @@ def _side_codes(m: int, period: int, rotation: int) -> list[tuple]:
 
     for first in range(m):
         extend([first], 0)
-    return codes
+    return None if len(codes) > MAX_CODES or visited[0] > 50 * MAX_CODES else codes
 
 
 def _canonical(code: list) -> bool:

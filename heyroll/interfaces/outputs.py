@@ -279,10 +279,20 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
         atomic_write_text(out_dir / "stroboscopic.csv", collisions_csv(strobe_table(result), result.precision.format))
         files["stroboscopic"] = "stroboscopic.csv"
     if figures:
-        from .figures import run_figures
-
-        return _figures_then_summary(run_figures, result, out_dir, scene_source, files, sink)
+        return _figures_then_summary(_run_figures, result, out_dir, scene_source, files, sink)
     return _write_summary(result, out_dir, scene_source, files, sink)
+
+
+def _run_figures(result, out_dir):
+    from .figures import run_figures  # (imported here: matplotlib's import is part of drawing, interruptible)
+
+    return run_figures(result, out_dir)
+
+
+def _table_figures(result, out_dir):
+    from .table_figures import table_figures
+
+    return table_figures(result, out_dir)
 
 
 class FiguresInterrupted(KeyboardInterrupt):
@@ -328,9 +338,7 @@ def _write_table_run(result, out_dir: Path, *, scene_source: str, figures: bool,
         sink.close()
     files = {"collisions": Path(sink.path).name, "summary": "summary.json"}
     if figures:
-        from .table_figures import table_figures
-
-        return _figures_then_summary(table_figures, result, out_dir, scene_source, files, sink)
+        return _figures_then_summary(_table_figures, result, out_dir, scene_source, files, sink)
     return _write_summary(result, out_dir, scene_source, files, sink)
 
 

@@ -16,7 +16,7 @@ import heyoka as hy
 from ...model._numbers import workprec
 from ...model.table import TableScene
 from ...model.table.boundaries import sqrt
-from ..driver import DEFAULT_MAX_EVENTS, RunOptions
+from ..driver import DEFAULT_MAX_EVENTS, RunOptions, signals_deferred
 from ..result import Status
 from .contacts import Contact, ContactGeometry
 from .resolve import SETTLED, SIMULTANEOUS, Resolver
@@ -1349,11 +1349,12 @@ class _Run:
     def flush(self) -> None:
         if self.sink is None or not self.records:
             return
-        self.sink.write(self.records, self.flushed + 1)
-        self.flushed += len(self.records)
-        if self.kept is None:
-            self.kept = self.records
-        self.records = []
+        with signals_deferred():  # a chunk is written whole and counted once, then Ctrl-C or SIGTERM acts
+            self.sink.write(self.records, self.flushed + 1)
+            self.flushed += len(self.records)
+            if self.kept is None:
+                self.kept = self.records
+            self.records = []
 
     def energy(self, state):
         total = self.zero
@@ -1376,8 +1377,15 @@ class _Run:
                     f"{what} overlap by {float(-c.distance):.3g} m at the end of the run (t = {float(self.t):.17g} s): "
                     "an impact was missed")
         if self.sink is not None:
-            self.flush()
-            self.sink.close()
+            try:
+                with signals_deferred():  # the table is written whole, then Ctrl-C or SIGTERM acts
+                    self.flush()
+                    self.sink.close()
+            except KeyboardInterrupt:  # (after the integration's end: the run is whole, its outputs too)
+                if self.status.success:
+                    self.status, self.message = Status.INTERRUPTED, (
+                        f"interrupted at t = {float(self.t):.17g} s after {self.count} impacts, while the table was "
+                        "written (it is whole)")
         if self.progress is not None:
             self.progress(float(self.t), self.count)
         records = self.kept if self.kept is not None else self.records
