@@ -184,8 +184,7 @@ def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicO
         thetas = 2 * np.pi * (starts[code] + t * lengths[code]) / lengths.sum()
         orbits.append(PeriodicOrbit(period=period, rotation=rotation, points=points, thetas=thetas,
                                     perimeter=float(norms.sum()), sin_reflection=np.sum(u * tangents, axis=1),
-                                    kind=kind, trace=trace, stability="parabolic" if abs(abs(trace) - 2) < 1e-6
-                                    else "stable" if abs(trace) < 2 else "unstable"))
+                                    kind=kind, trace=trace, stability=_stability(trace)))
     return sorted(orbits, key=lambda o: -o.perimeter)
 
 
@@ -336,13 +335,16 @@ def _describe(scene, curve, thetas, rotation, radius) -> PeriodicOrbit:
     eig = np.linalg.eigvalsh(_hessian(curve, thetas))
     kind = "max" if np.all(eig < 1e-7 * np.max(np.abs(eig))) else "minimax"
     trace = return_map_trace(scene, points, out, radius)
-    if abs(trace - 2) < 1e-6 or abs(trace + 2) < 1e-6:
-        stability = "parabolic"
-    else:
-        stability = "stable" if abs(trace) < 2 else "unstable"
     return PeriodicOrbit(period=len(thetas), rotation=rotation, points=points, thetas=np.mod(thetas, 2 * np.pi),
                          perimeter=perimeter, sin_reflection=sin_reflection, kind=kind, trace=trace,
-                         stability=stability)
+                         stability=_stability(trace))
+
+
+def _stability(trace: float) -> str:
+    """|trace| of the linearized return map < 2 stable (elliptic), > 2 unstable, = 2 parabolic (to 1e-6)."""
+    if abs(abs(trace) - 2) < 1e-6:
+        return "parabolic"
+    return "stable" if abs(trace) < 2 else "unstable"
 
 
 def return_map_trace(scene, points, directions, radius, dps: int = 30, h: str = "1e-12") -> float:

@@ -52,26 +52,35 @@ class CompiledCache:
         return entry
 
 
+def _memoized(f, memo_of, keep: int | None = None):
+    """``f(scene, *args)`` kept in ``memo_of(scene)`` (a dict) by (f, args); with ``keep`` only the last ``keep``
+    scenes' values are kept (the older ones are dropped from their memos)."""
+    recent: deque = deque()
+
+    @functools.wraps(f)
+    def cached(scene, *args):
+        memo = memo_of(scene)
+        key = (f, args)
+        value = memo.get(key, memo)
+        if value is memo:
+            value = memo[key] = f(scene, *args)
+            if keep is not None:
+                recent.append((memo, key))
+                while len(recent) > keep:
+                    old, old_key = recent.popleft()
+                    old.pop(old_key, None)
+        return value
+
+    return cached
+
+
 def by_constants():
     """Cache ``f(scene, *args)`` by the scene's constants (model.scene.Scene.constants) and ``args``:
     for what depends on a scene's bodies, track and laws but not on its state, so that scenes which
     differ only in where they start (a sweep's points) compute it once. Kept in the constants' own
     ``memo`` (interned, bounded in number): a lookup is one dict access, ~0.3 us, where a shared
     least-recently-used table took ~1 us (measured; a run's set-up asks several)."""
-
-    def decorate(f):
-        @functools.wraps(f)
-        def cached(scene, *args):
-            memo = scene.constants.memo
-            key = (f, args)
-            value = memo.get(key, memo)
-            if value is memo:
-                value = memo[key] = f(scene, *args)
-            return value
-
-        return cached
-
-    return decorate
+    return lambda f: _memoized(f, lambda scene: scene.constants.memo)
 
 
 def by_scene(f=None, *, keep: int | None = None):
@@ -82,22 +91,6 @@ def by_scene(f=None, *, keep: int | None = None):
     compiled system: results that keep their scenes must not keep every one of those, review)."""
 
     def decorate(f):
-        recent: deque = deque()
-
-        @functools.wraps(f)
-        def cached(scene, *args):
-            memo = scene.memo
-            key = (f, args)
-            value = memo.get(key, memo)
-            if value is memo:
-                value = memo[key] = f(scene, *args)
-                if keep is not None:
-                    recent.append((scene, key))
-                    while len(recent) > keep:
-                        old, old_key = recent.popleft()
-                        old.memo.pop(old_key, None)
-            return value
-
-        return cached
+        return _memoized(f, lambda scene: scene.memo, keep)
 
     return decorate if f is None else decorate(f)

@@ -318,8 +318,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             ta.pars[:] = params[: len(ta.pars)]  # heyoka keeps those up to the last one used
             if system.per_body and (system.links or any(u.pinned for u in units)):
                 full_state = project_onto_contacts(system, full_state, params)
-            ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra if system.n_extra or \
-                system.n_units != len(scene.bodies) else full_state
+            ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra
             ta.dtime = t
             if slots:
                 ta.reset_cooldowns()

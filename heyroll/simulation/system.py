@@ -313,7 +313,7 @@ class SceneSystem:
     def reduce(self, full_state) -> list:
         """Unit state from a full state (first member's angle and rate)."""
         n = self.n_bodies
-        if self.per_body:
+        if self.per_body or self.n_units == n:  # (every body free: the units are the bodies, in order)
             return list(full_state)
         psi = [full_state[u.members[0]] for u in self.units]
         dpsi = [full_state[n + u.members[0]] for u in self.units]

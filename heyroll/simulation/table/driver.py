@@ -210,7 +210,8 @@ class _Run:
                 self.at_instant(None)
             elif event.kind in ("release", "pair_roll", "pair_grip"):
                 # a pressed pair's contact force vanishes, a member's slip ends, a rolling member loses its grip
-                {"release": self.release_event, "pair_roll": self.pair_reroll,
+                # (release: the pair's contact force fell to zero, friction no longer drives the balls together)
+                {"release": lambda i, j: self.release(i, j, let_go=True), "pair_roll": self.pair_reroll,
                  "pair_grip": self.pair_grip_lost}[event.kind](event.ball, event.other)
                 if self.status is None:
                     self.at_instant(None)
@@ -330,7 +331,7 @@ class _Run:
         b, s = BALL_PARS * k, STATE_PER_BALL * k
         zero = self.zero
         ux, uy = self.state[s + 4], self.state[s + 5]
-        sliding = ux != zero or uy != zero
+        sliding = self._has_slip(k)
         if sliding and ux * ux + uy * uy < (self.skid_onset / 2) ** 2:
             self.end_slip(k)
             self.hold_pair(k)
@@ -346,10 +347,13 @@ class _Run:
         grips = not sliding and float(self.pars[b + SPIN]) > 0 and float(self.pars[b + MU_G]) > 0
         self.pars[first + P_GI + own] = zero + 1 if grips else zero
 
+    def _has_slip(self, k: int) -> bool:
+        s = STATE_PER_BALL * k
+        return self.state[s + 4] != self.zero or self.state[s + 5] != self.zero
+
     def _mobility(self, k: int):
         """1/m of ball k sliding (a force through its centre leaves its spin), 1/(kappa m) rolling (run type)."""
-        s = STATE_PER_BALL * k
-        if self.state[s + 4] != self.zero or self.state[s + 5] != self.zero:
+        if self._has_slip(k):
             return 1 / self.mass[k]
         return 1 / (self.mass[k] * (self.spin_inertia[k] + 1))
 
@@ -395,7 +399,7 @@ class _Run:
             s = STATE_PER_BALL * k
             dvx, dvy = sign * impulse * w * nx, sign * impulse * w * ny
             self.state[s + 2], self.state[s + 3] = self.state[s + 2] + dvx, self.state[s + 3] + dvy
-            if self.state[s + 4] != self.zero or self.state[s + 5] != self.zero:
+            if self._has_slip(k):
                 self.state[s + 4], self.state[s + 5] = self.state[s + 4] + dvx, self.state[s + 5] + dvy
 
     def hold_pair(self, k: int) -> None:
@@ -427,10 +431,6 @@ class _Run:
         for k in balls:
             if self.partner[k] is not None:
                 self.release(k, self.partner[k])
-
-    def release_event(self, i: int, j: int) -> None:
-        """The pair's contact force fell to zero: friction no longer drives the balls into each other."""
-        self.release(i, j, let_go=True)
 
     def pair_reroll(self, k: int, other: int) -> None:
         """Member k's slip ended: it rolls on, pressed (its mobility now 1/(kappa m)), unless the pair's push
@@ -780,7 +780,6 @@ class _Run:
                     hit.update((first.i, first.j))
                 touching = [c for c in near
                             if not self.rides(c) or c.i in hit or self.closing(c)]
-                touching += [c for c in self.rider_walls(sorted(hit), near) if not any(_same(c, t) for t in near)]
                 if first is not None and not any(_same(first, c) for c in touching):
                     touching.append(first)
                 approaching = [c for c in touching if self.closing(c)]
@@ -867,7 +866,7 @@ class _Run:
         if contact.kind == "wall":
             return [c for c in near if c.kind == "wall" and c.i == contact.i]
         if not cleanup and (self.riding[contact.i] or self.riding[contact.j]):
-            return [contact] + self.rider_walls((contact.i, contact.j), near)
+            return [contact] + [c for c in near if self.rides(c) and c.i in (contact.i, contact.j)]
         return [contact]
 
     def touching(self) -> list:
@@ -875,25 +874,12 @@ class _Run:
         round-off has put the ball: an impact can drive a rider into it (a hit rider 2.9e-12 m off its curve,
         beyond the tolerance, rode on into the cushion at 0.41 m/s and overlapped it by 6 mm: review)."""
         near = self.geometry.contacts(self.state, self.geometry.touch)
-        riders = [k for k, on in enumerate(self.riding) if on]
-        return near + [c for c in self.rider_walls(riders, near) if not any(_same(c, n) for n in near)] \
-            if riders else near
-
-    def rider_walls(self, balls, near: list) -> list:
-        """The cushion contacts the riding balls among ``balls`` ride, from ``near`` or, where round-off has put
-        the ball beyond the contact tolerance of its curve, made here (a hit rider 2.9e-12 m off its ellipse's
-        curve kept riding into the cushion at 0.41 m/s: review)."""
-        out = []
-        for k in balls:
-            if not self.riding[k]:
-                continue
-            found = [c for c in near if self.rides(c) and c.i == k]
-            if not found:
+        for k, on in enumerate(self.riding):
+            if on and not any(self.rides(c) and c.i == k for c in near):
                 s, w = STATE_PER_BALL * k, self.ride_wall[k]
                 distance, normal = self.geometry.wall(k, w, self.state[s], self.state[s + 1])
-                found = [Contact("wall", k, w, normal, distance)]
-            out += found
-        return out
+                near.append(Contact("wall", k, w, normal, distance))
+        return near
 
     def overlapping(self, near: list) -> list:
         """The contacts of ``near`` that overlap: an impact was missed. A riding ball is held on its wall's gap
@@ -1094,9 +1080,7 @@ class _Run:
 
     def slides(self, k: int) -> bool:
         """Ball k slides on the cloth (a slip, with or without friction to end it)."""
-        s = STATE_PER_BALL * k
-        return self.pars[BALL_PARS * k + SLIDING] != self.zero or self.state[s + 4] != self.zero \
-            or self.state[s + 5] != self.zero
+        return self.pars[BALL_PARS * k + SLIDING] != self.zero or self._has_slip(k)
 
     def settle_riders(self, near: list) -> bool:
         """The balls on a curved cushion at this instant, before a round of impacts (system.can_ride).
