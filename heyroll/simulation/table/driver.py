@@ -18,11 +18,14 @@ from ...model.table import TableScene
 from ...model.table.boundaries import sqrt
 from ..driver import DEFAULT_MAX_EVENTS, RunOptions, signals_deferred
 from ..result import Status
+from . import bonds as bonds_module
+from .bonds import MAX_CLUSTER_BONDS, bond_balls
 from .contacts import Contact, ContactGeometry
 from .resolve import SETTLED, SIMULTANEOUS, Resolver
 from .result import TableResult
-from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, MODE_PARS, MU_G, P_GI, P_SI, P_WI, RIDE_HOLD,
-                     RIDE_SPEED2, RIDING, SKID, SLIDING, SPIN, STATE_PER_BALL, integrator, needs_grip, table_system)
+from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, M_GRIP, M_MOBILITY, M_SLIDING, MODE_PARS, MU_G,
+                     RIDE_HOLD, RIDE_SPEED2, RIDING, SKID, SLIDING, SPIN, STATE_PER_BALL, integrator, needs_grip,
+                     table_system)
 
 #: Resolutions of one pair with a riding ball at one instant before it counts as pressed together.
 RIDER_PAIR_REPEATS = 32
@@ -71,7 +74,7 @@ class _Run:
         if opts.tolerance is not None:
             options["tol"] = num(opts.tolerance)
         self.system = self.base_system = table_system(scene, precision)
-        #: the systems of the run by its pressed pairs (() the scene's own: :meth:`switch_system`)
+        #: the systems of the run by its bonds (() the scene's own: :meth:`switch_system`)
         self.systems = {(): self.system}
         self.geometry = ContactGeometry(scene, self.system, precision)
         self.resolver = Resolver(scene, precision)
@@ -133,12 +136,15 @@ class _Run:
         self.lifted: dict = {}
         #: rolling riders past their grip, by ball: the instant their slip reaches SKID_ONSET (:meth:`grip_lost`)
         self.onsets: dict = {}
-        #: per ball, the ball it is pressed together with (:meth:`press`), or None; the pressed pairs (i < j)
-        self.partner: list = [None] * scene.n_bodies
-        self.pressed_pairs: set = set()
+        #: contacts held closed (module bonds: balls pressed together, :meth:`press`, and the cushion a member
+        #: of such a cluster rides); per ball, its bonds
+        self.bonds: set = set()
+        self.ball_bonds: list = [set() for _ in scene.balls]
         #: the instant each pair last let go (it is not pressed again at that instant: its push is zero to
         #: round-off there, and pressed again it let go again at once, for ever, or was held by a pull: review)
         self.let_go: dict = {}
+        #: the instant the integrator was last replaced (switch_system): its events have no cooldown
+        self.switched = None
         self.skid_onset = num(SKID_ONSET * float(self.geometry.size) / self.system.max_step)
         self.status, self.message = None, ""
         self.fired = None
@@ -167,7 +173,7 @@ class _Run:
             self.push()
         time_limit, step_limit = hy.taylor_outcome.time_limit, hy.taylor_outcome.step_limit
         while self.status is None:
-            ta = self.ta  # (a pair pressed together or released switches the system: switch_system)
+            ta = self.ta  # (a bond made or released switches the system: switch_system)
             n_events = len(self.system.events)
             before = ta.time
             until = min([self.t_end, *self.onsets.values()])
@@ -208,11 +214,13 @@ class _Run:
                 {"roll": self.reroll, "lift": self.lift, "grip": self.grip_lost}[event.kind](event.ball)
                 # the accelerations changed: a pair or cushion touching now may start to close
                 self.at_instant(None)
-            elif event.kind in ("release", "pair_roll", "pair_grip"):
-                # a pressed pair's contact force vanishes, a member's slip ends, a rolling member loses its grip
-                # (release: the pair's contact force fell to zero, friction no longer drives the balls together)
-                {"release": lambda i, j: self.release(i, j, let_go=True), "pair_roll": self.pair_reroll,
-                 "pair_grip": self.pair_grip_lost}[event.kind](event.ball, event.other)
+            elif event.kind in ("release", "bond_lift", "pair_roll", "pair_grip"):
+                # a bond's contact force vanishes (friction no longer drives the balls together, or the ball into
+                # the cushion), a member's slip ends, a rolling member loses its grip
+                if event.kind in ("release", "bond_lift"):
+                    self.let_bonds_go([("pair" if event.kind == "release" else "wall", event.ball, event.other)])
+                else:
+                    {"pair_roll": self.pair_reroll, "pair_grip": self.pair_grip_lost}[event.kind](event.ball)
                 if self.status is None:
                     self.at_instant(None)
             else:
@@ -240,8 +248,8 @@ class _Run:
         out = []
         for k in range(self.scene.n_bodies):
             b = BALL_PARS * k
-            # (a pressed pair's member: its acceleration now, the figures' parabola of its curve)
-            out += list(self._present_acceleration(k)) if self.partner[k] is not None else \
+            # (a member of a cluster of bonds: its acceleration now, the figures' parabola of its curve)
+            out += list(self._present_acceleration(k)) if self.ball_bonds[k] else \
                 [float(self.pars[b + FVX]), float(self.pars[b + FVY])]
         return out
 
@@ -265,7 +273,7 @@ class _Run:
         d = u/|u| or rolls. Riding: it skids (slides along the cushion, its friction's direction turning with
         the slip) or rolls on the cushion at the speed it has now, held, its grip watched where the cushion
         model needs it."""
-        if self.partner[k] is not None:
+        if self.ball_bonds[k]:
             self._set_pressed_mode(k)
             return
         b, s = BALL_PARS * k, STATE_PER_BALL * k
@@ -324,28 +332,32 @@ class _Run:
                 self.pars[self.system.ride_flags[(k, w)]] = zero + 1 if on else zero
 
     def _set_pressed_mode(self, k: int) -> None:
-        """Ball k is pressed together with its partner (:meth:`press`): its own mode parameters are 0 (its
-        friction, with its turning direction, is in its pair's terms: system._pressed_terms) and its pair's
-        say whether it slides, its mobility and whether its grip is watched. A slip under SKID_ONSET/2 ends at
-        once, as a rider's (its direction relaxes too fast to follow: set_mode)."""
+        """Ball k is a member of a cluster of bonds (:meth:`press`): its own mode parameters are 0 (its friction,
+        with its turning direction, is in the cluster's terms: system._bond_terms; so is its cushion's force
+        where it rides one, that wall's event staying off) and its member parameters say whether it slides, its
+        mobility and whether its grip is watched. A slip under SKID_ONSET/2 ends at once, as a rider's (its
+        direction relaxes too fast to follow: set_mode)."""
         b, s = BALL_PARS * k, STATE_PER_BALL * k
         zero = self.zero
         ux, uy = self.state[s + 4], self.state[s + 5]
         sliding = self._has_slip(k)
         if sliding and ux * ux + uy * uy < (self.skid_onset / 2) ** 2:
             self.end_slip(k)
-            self.hold_pair(k)
+            self.hold_cluster(k)
+            self.rerolls += 1
             sliding = False
         self.pars[b:b + MODE_PARS] = [zero] * MODE_PARS
         if self.system.ride:
+            walls = self.held_walls(k)  # bonds: their events off, their forces the cluster's
             for w in range(self.scene.boundary.n_walls()):
-                self.pars[self.system.ride_flags[(k, w)]] = zero
-        i, j = sorted((k, self.partner[k]))
-        first, own = self.system.pressed[(i, j)], 0 if k == i else 1
-        self.pars[first + P_SI + own] = zero + 1 if sliding else zero
-        self.pars[first + P_WI + own] = self._mobility(k)
+                self.pars[self.system.ride_flags[(k, w)]] = zero + 1 if w in walls else zero
+        first = self.system.members.get(k)
+        if first is None:  # (switch_system sets every member once the system has its bonds)
+            return
+        self.pars[first + M_SLIDING] = zero + 1 if sliding else zero
+        self.pars[first + M_MOBILITY] = self._mobility(k)
         grips = not sliding and float(self.pars[b + SPIN]) > 0 and float(self.pars[b + MU_G]) > 0
-        self.pars[first + P_GI + own] = zero + 1 if grips else zero
+        self.pars[first + M_GRIP] = zero + 1 if grips else zero
 
     def _has_slip(self, k: int) -> bool:
         s = STATE_PER_BALL * k
@@ -357,126 +369,204 @@ class _Run:
             return 1 / self.mass[k]
         return 1 / (self.mass[k] * (self.spin_inertia[k] + 1))
 
-    # -- balls pressed together -----------------------------------------------------------------
+    # -- balls pressed together (bonds) -------------------------------------------------------
+    def bonded_pair(self, i: int, j: int) -> bool:
+        return ("pair", min(i, j), max(i, j)) in self.bonds
+
+    def held_walls(self, k: int) -> tuple:
+        """The walls ball k rides (both walls of the corner it is pinned in)."""
+        return () if not self.riding[k] else self.pinned[k] or (self.ride_wall[k],)
+
+    def new_bonds(self, i: int, j: int) -> list:
+        """The bonds that pressing balls i and j together makes: their pair, and the cushion walls each rides."""
+        made = [("pair", min(i, j), max(i, j))] + [("wall", k, w) for k in (i, j) for w in self.held_walls(k)]
+        return [b for b in made if b not in self.bonds]
+
     def why_not_pressed(self, i: int, j: int) -> str:
         """'' where balls i and j can be pressed together (:meth:`press`), else why not (one clause)."""
-        for k in (i, j):
-            if self.riding[k]:
-                return f"ball {k + 1} rides the cushion, which turns it into the other"
-            if self.partner[k] is not None:
-                return f"ball {k + 1} is pressed against ball {self.partner[k] + 1} already"
+        cluster = bonds_module.cluster_of(self.bonds | set(self.new_bonds(i, j)), i)
+        if len(cluster) > MAX_CLUSTER_BONDS:
+            return f"their cluster would hold {len(cluster)} contacts (at most {MAX_CLUSTER_BONDS} are solved together)"
         return ""
 
     def press(self, contact: Contact) -> None:
         """Balls i and j stay pressed together from now on: the limit of their accumulating impacts (k < 1,
-        sliding friction driving them into each other), as a rider's on the cushion. Their normal relative
-        speed (round-off, or a bounce too low to resolve) is removed by an impulse through the centres that
-        keeps the momentum with the mobilities of :meth:`_mobility` (a sliding ball's spin unchanged, a
-        rolling one rolling); one row, law_flag SETTLED, whose energy change is what the rest of the
-        accumulation would dissipate. Then their contact force holds them together (system._pressed_terms)
-        until it vanishes (the release event), an impact on either ends it, or a member needs more friction
-        than the cloth gives."""
+        sliding friction driving them into each other), as a rider's on the cushion. A pair bond (and, for a
+        ball that rides the cushion, a bond to it) joins the cluster of bonds the balls are in (module bonds).
+        The cluster's normal relative speeds (round-off, or a bounce too low to resolve) are removed by
+        impulses through the centres that keep the momentum with the mobilities of :meth:`_mobility` (a sliding
+        ball's spin unchanged, a rolling one rolling): one row, law_flag SETTLED, whose energy change is what the
+        rest of the accumulation would dissipate. Then the cluster's contact forces hold it together
+        (system._bond_terms) until one vanishes (the release event), an impact on a member ends its bonds, or a
+        member needs more friction than the cloth gives."""
         i, j = contact.i, contact.j
         before = list(self.state)
         energy_before = self.energy(before)
-        self._remove_opening(i, j, contact.normal)
+        for bond in self.new_bonds(i, j):
+            self._bond(bond)
+        self.hold_cluster(i)
         for k in (i, j):
             self.onsets.pop(k, None)
-        self.partner[i], self.partner[j] = j, i
-        self.pressed_pairs.add((i, j))
-        self.switch_system()
+        self.switch_system((i, j))
         self.record(contact, before, self.state, energy_before, self.energy(self.state), SETTLED)
+        self.let_bonds_go([])  # a bond the new one pulls on (its force turned) lets go
 
-    def _remove_opening(self, i: int, j: int, normal) -> None:
-        """The impulse through the centres of balls i, j along ``normal`` (from i to j) that leaves them no
-        normal relative speed and keeps their momentum with the mobilities of :meth:`_mobility`."""
-        si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
-        nx, ny = normal
-        wi, wj = self._mobility(i), self._mobility(j)
-        opening = (self.state[sj + 2] - self.state[si + 2]) * nx + (self.state[sj + 3] - self.state[si + 3]) * ny
-        impulse = -opening / (wi + wj)  # along n on j, the opposite on i
-        for k, w, sign in ((i, wi, -1), (j, wj, 1)):
-            s = STATE_PER_BALL * k
-            dvx, dvy = sign * impulse * w * nx, sign * impulse * w * ny
+    def _bond(self, bond: tuple) -> None:
+        self.bonds.add(bond)
+        for k in bond_balls(bond):
+            self.ball_bonds[k].add(bond)
+
+    def _unbond(self, bond: tuple) -> None:
+        self.bonds.discard(bond)
+        for k in bond_balls(bond):
+            self.ball_bonds[k].discard(bond)
+
+    def _cluster_rows(self, group: list, run_type: bool = False) -> tuple:
+        """Directions and mobilities of a cluster's bonds (module bonds) at the present state, as floats (for
+        decisions) or in the run's type (``run_type``: the impulses of :meth:`hold_cluster`)."""
+        value = (lambda v: v) if run_type else float
+        directions = []
+        for bond in group:
+            if bond[0] == "pair":
+                _, i, j = bond
+                si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
+                dx, dy = (value(self.state[sj + m] - self.state[si + m]) for m in (0, 1))
+                directions.append({i: (-dx, -dy), j: (dx, dy)})
+            else:
+                _, k, w = bond
+                gx, gy = self._wall_gradient(k, w)
+                directions.append({k: (-value(gx), -value(gy))})
+        mobility = {k: value(self._mobility(k)) for bond in group for k in bond_balls(bond)}
+        return directions, mobility
+
+    def hold_cluster(self, k: int) -> None:
+        """Remove the normal relative speeds of the bonds of ball k's cluster (J v = 0) by impulses through the
+        centres with the mobilities of :meth:`_mobility` (A P = -J v, module bonds): after a bond is made, or a
+        member's velocity jumped (its slip ended by friction's impulse at the slip end, :meth:`end_slip`) as the
+        cushion does a rider's (else a pair opened or closed at ~1e-13 m/s, seen as an impact where it let go)."""
+        group = bonds_module.cluster_of(self.bonds, k)
+        if not group:
+            return
+        directions, mobility = self._cluster_rows(group, run_type=True)
+        velocity = {b: (self.state[STATE_PER_BALL * b + 2], self.state[STATE_PER_BALL * b + 3]) for b in mobility}
+        opening = [-v for v in bonds_module.free_work(directions, velocity)]
+        impulses, = bonds_module.solve(bonds_module.bond_matrix(directions, mobility), [opening])
+        for b, (dvx, dvy) in bonds_module.pushes(directions, mobility, impulses).items():
+            s = STATE_PER_BALL * b
+            sliding = self._has_slip(b)
             self.state[s + 2], self.state[s + 3] = self.state[s + 2] + dvx, self.state[s + 3] + dvy
-            if self._has_slip(k):
+            if sliding:
                 self.state[s + 4], self.state[s + 5] = self.state[s + 4] + dvx, self.state[s + 5] + dvy
 
-    def hold_pair(self, k: int) -> None:
-        """A member's velocity jumped (its slip ended by friction's impulse at the slip end, :meth:`end_slip`):
-        the contact takes the part of that jump along it, as the cushion does a rider's (else the pair opened or
-        closed at ~1e-13 m/s, seen as an impact where it let go)."""
-        other = self.partner[k]
-        if other is None:
-            return
-        i, j = sorted((k, other))
-        _, normal = self.geometry.pair(i, j, self.state)
-        self._remove_opening(i, j, normal)
+    def bond_forces(self, group: list) -> tuple:
+        """The multipliers of a cluster's bonds without Baumgarte's terms (float; > 0 pushing) and per member the
+        acceleration they give it (module bonds; the cushion's v^T H v by central differences: for decisions)."""
+        directions, mobility = self._cluster_rows(group)
+        plain = []
+        for bond in group:
+            if bond[0] == "pair":
+                _, i, j = bond
+                si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
+                dvx, dvy = (float(self.state[sj + m] - self.state[si + m]) for m in (2, 3))
+                plain.append(-(dvx * dvx + dvy * dvy))
+            else:
+                plain.append(self._gap_terms(bond[1], wall=bond[2])[2])
+        free = {k: self._free_acceleration(k) for k in mobility}
+        work = bonds_module.free_work(directions, free)
+        lam, = bonds_module.solve(bonds_module.bond_matrix(directions, mobility),
+                                  [[p - w for p, w in zip(plain, work)]])
+        contact = bonds_module.pushes(directions, mobility, lam)
+        return lam, {k: (free[k][0] + contact[k][0], free[k][1] + contact[k][1]) for k in contact}
 
-    def release(self, i: int, j: int, let_go: bool = False) -> None:
-        """Balls i and j are no longer pressed together: each moves on its own from now (its own mode).
-        ``let_go``: their push has turned (not an impact on one of them, after which they may be pressed again at
-        once: kept apart from that, such a pair closed unseen, random scenes)."""
-        self.pressed_pairs.discard((min(i, j), max(i, j)))
-        if let_go:
-            self.let_go[(min(i, j), max(i, j))] = self.t
-        self.partner[i] = self.partner[j] = None
-        self.switch_system()
-        self.set_mode(i)
-        self.set_mode(j)
+    def release(self, bonds: list, let_go: bool = False) -> None:
+        """The ``bonds`` no longer hold: each ball moves on its own or in what is left of its cluster. A wall bond
+        goes with the last pair bond of its ball (the ball rides its cushion on, alone); a released wall bond
+        lifts the ball off its cushion. ``let_go``: their push has turned (not an impact on a member, after which
+        they may be pressed again at once: kept apart from that, such a pair closed unseen, random scenes)."""
+        if not bonds:
+            return
+        touched = {k for bond in bonds for k in bond_balls(bond)}
+        for bond in bonds:
+            self._unbond(bond)
+            if bond[0] == "pair" and let_go:
+                self.let_go[(bond[1], bond[2])] = self.t
+            if bond[0] == "wall":
+                k = bond[1]
+                if self.pinned[k] is not None:  # out of its corner: it rides the other wall
+                    self.ride_wall[k] = next(w for w in self.pinned[k] if w != bond[2])
+                    self.pinned[k] = None
+                else:
+                    self.riding[k] = False
+                    self.lifted[k] = self.t
+        for k in list(touched):
+            if not any(b[0] == "pair" for b in self.ball_bonds[k]):
+                for bond in list(self.ball_bonds[k]):  # its cushion, held by the cluster no more: it rides it alone
+                    self._unbond(bond)
+                if self.pinned[k] is not None and not self._has_slip(k):
+                    self.unpin(k)  # at rest in its corner, rolling: nothing presses it any more
+        self.switch_system(touched)
+
+    def let_bonds_go(self, bonds: list) -> None:
+        """Release ``bonds`` (their force has vanished) and then, one by one, the bond whose force is most
+        negative (pulling) until every bond left pushes: releasing one changes the others' forces."""
+        self.release(bonds, let_go=True)
+        for _ in range(len(self.bonds)):
+            worst, least = None, 0.0
+            for group in bonds_module.clusters(self.bonds):
+                lam, _ = self.bond_forces(group)
+                for bond, value in zip(group, lam):
+                    if not value > least:
+                        worst, least = bond, value
+            if worst is None:
+                return
+            self.release([worst], let_go=True)
 
     def release_balls(self, balls) -> None:
-        """An impact on a pressed ball ends its pair's contact (the impact is resolved as any other; the
-        pair is judged again after it, :meth:`check_pressed_pair`)."""
-        for k in balls:
-            if self.partner[k] is not None:
-                self.release(k, self.partner[k])
+        """An impact on a ball in a cluster ends its pair bonds (the impact is resolved as any other; its pairs
+        are judged again after it, :meth:`check_pressed_pair`)."""
+        ending = [b for k in balls for b in self.ball_bonds[k] if b[0] == "pair"]
+        self.release(sorted(set(ending)))
 
-    def pair_reroll(self, k: int, other: int) -> None:
-        """Member k's slip ended: it rolls on, pressed (its mobility now 1/(kappa m)), unless the pair's push
-        has turned (then the pair lets go)."""
+    def pair_reroll(self, k: int) -> None:
+        """Member k's slip ended: it rolls on, pressed (its mobility now 1/(kappa m)), unless its cluster's
+        forces have turned (then those bonds let go). A member whose slip ends at the same instant (a row of equal
+        balls) rolls too (set_mode): heyoka does not see a root at the very start of its next step."""
         self.end_slip(k)
-        self.hold_pair(k)
+        self.hold_cluster(k)
         self.rerolls += 1
-        self.set_mode(k)
-        if self._pair_push(k, other) >= 0:
-            self.release(k, other, let_go=True)
+        for member in sorted({b for bond in bonds_module.cluster_of(self.bonds, k) for b in bond_balls(bond)}):
+            self.set_mode(member)
+        self.let_bonds_go([])
 
-    def pair_grip_lost(self, k: int, other: int) -> None:
+    def pair_grip_lost(self, k: int) -> None:
         s = STATE_PER_BALL * k
-        self.stop(Status.FAILED, f"ball {k + 1}, rolling pressed against ball {other + 1}, would need more of the "
+        others = sorted({b for bond in self.ball_bonds[k] if bond[0] == "pair" for b in bond_balls(bond)} - {k})
+        what = ", ".join(str(b + 1) for b in others) + (" and the cushion" if self.riding[k] else "")
+        self.stop(Status.FAILED, f"ball {k + 1}, rolling pressed against ball {what}, would need more of the "
                                  f"cloth's friction than mu m g to roll on at t = {float(self.t):.17g} s (x = "
                                  f"{float(self.state[s]):.6g}, y = {float(self.state[s + 1]):.6g}): a pressed ball "
                                  "pushed into sliding is not modelled")
 
-    def switch_system(self) -> None:
-        """The run's system for its pressed pairs now (compiled once per set of pairs), its parameters the
-        scene's part of the present ones plus each pair's, every member's mode set; a pressed pair's own
-        impact event is off (its parameter -1: |dc|^2 + 1 never crosses zero)."""
-        key = tuple(sorted(self.pressed_pairs))
+    def switch_system(self, balls=()) -> None:
+        """The run's system for its bonds now (compiled once per set of bonds), its parameters the scene's part
+        of the present ones plus the bonds', the mode of every member and of ``balls`` (whose bonds changed)
+        set; a pair bond's own impact event is off (its parameter -1: |dc|^2 + 1 never crosses zero)."""
+        key = tuple(sorted(self.bonds))
         system = self.systems.get(key)
         if system is None:
             system = self.systems[key] = table_system(self.scene, self.precision, key)
         base = self.base_system
         self.pars = self.pars[:len(base.pars)] + list(system.pars[len(base.pars):])
         for pair, (index, _) in base.pairs.items():
-            self.pars[index] = self.num(-1) if pair in self.pressed_pairs else base.pars[index]
+            self.pars[index] = self.num(-1) if ("pair", *pair) in self.bonds else base.pars[index]
         self.system = system
-        for i, j in key:
-            self.set_mode(i)
-            self.set_mode(j)
+        for k in sorted(set(balls) | set(system.members)):
+            self.set_mode(k)
         if self.ta is not None:
+            self.switched = self.t
             self.ta = integrator(self.scene, system, self.precision, self.options, self.state)
             self.ta.time = self.t
             self.ta.pars[:] = self.pars
-
-    def _pair_push(self, i: int, j: int) -> float:
-        """|dv|^2 + dc . (f_j - f_i) of balls i, j (float): negative while friction presses them together."""
-        si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
-        dx, dy = (float(self.state[sj + m] - self.state[si + m]) for m in (0, 1))
-        dvx, dvy = (float(self.state[sj + m] - self.state[si + m]) for m in (2, 3))
-        fi, fj = self._free_acceleration(i), self._free_acceleration(j)
-        return dvx * dvx + dvy * dvy + dx * (fj[0] - fi[0]) + dy * (fj[1] - fi[1])
 
     def end_slip(self, k: int, cushion=None) -> None:
         """End ball k's slip at once, as friction ends a slip: by an impulse against it, v losing (kappa - 1)/kappa
@@ -522,7 +612,7 @@ class _Run:
     def grip_or_skid(self, k: int) -> None:
         """A rider rolling under the ``slide`` cushion model keeps rolling while the cloth's friction can turn
         its spin with it, (kappa - 1) |v'| <= mu g (system module docstring); otherwise it skids from now."""
-        if not self.riding[k] or self.slides(k) or not self.needs_grip[k] or k in self.onsets:
+        if not self.riding[k] or self.slides(k) or not self.needs_grip[k] or k in self.onsets or self.ball_bonds[k]:
             return
         excess = self._grip_excess(k)
         if excess > 0:
@@ -634,9 +724,10 @@ class _Run:
                     self.ride(k, record=False, wall=wall)
 
     def presses(self, k: int, wall: int) -> bool:
-        """Ball k's free acceleration (its sliding friction) drives it into ``wall``."""
+        """Ball k's free acceleration (its sliding friction; a cluster's member: its bonds' forces too) drives it into
+        ``wall``."""
         gx, gy = self._wall_gradient(k, wall)
-        ax, ay = self._free_acceleration(k)
+        ax, ay = self._present_acceleration(k) if self.ball_bonds[k] else self._free_acceleration(k)
         return ax * float(gx) + ay * float(gy) > 0
 
     def lift(self, k: int) -> None:
@@ -763,6 +854,7 @@ class _Run:
         first = fired if impulses else None
         cleanup = False  # 'impulses' after its simultaneous resolution: what it left, one by one
         rider_hits: dict = {}  # a pair with a riding ball resolved at this instant, how often
+        collapsed = None  # such a pair resolved more than RIDER_PAIR_REPEATS times
         for _ in range(MAX_AT_ONE_INSTANT):
             if self.status is not None:
                 if not impulses:
@@ -804,8 +896,9 @@ class _Run:
                     rider_hits[key] = rider_hits.get(key, 0) + 1
                     if rider_hits[key] > RIDER_PAIR_REPEATS:
                         # resolved, settled back onto the cushion, met again, at one instant: the cushion turns
-                        # them into each other (it went on 10,000 times: random scenes)
-                        self.stop_pressed(contact)
+                        # them into each other (it went on 10,000 times: random scenes). Their limit: pressed
+                        # together below (check_pressed_pair) where the pair is driven together; else the run stops
+                        collapsed = contact
                         break
                 group = self._together(contact, near, cleanup)
                 if len(group) > 1:
@@ -830,26 +923,34 @@ class _Run:
             self.settle_corners(near)
         # cushions first: a ball that settles onto its cushion now is judged as a rider in its pairs (a ball
         # driven by friction into one riding the cushion was judged against the free ball and went on impact by
-        # impact, 1e-8 s apart)
-        for c in near:
-            if c.kind == "wall":
-                self.check_cushion_contact(c)
-        # and pairs until none is pressed anew: a pair pressed together changes its members' accelerations, so a
-        # pair judged before it is judged again (a ball driven into a pressed pair's member was judged against the
-        # free member and went on impact by impact, 6e-7 s apart: random scenes)
+        # impact, 1e-8 s apart); then pairs; and both again until nothing is pressed anew: a bond changes its
+        # members' accelerations (a ball driven into a pressed pair's member was judged against the free member
+        # and went on impact by impact, 6e-7 s apart: random scenes; a pair pressed into a cushion pushes its
+        # member onto it)
         for _ in range(len(near) + 1):
-            pressed = len(self.pressed_pairs)
+            made = (frozenset(self.bonds), tuple(self.riding))
+            for c in near:
+                if c.kind == "wall" and self.status is None:
+                    self.check_cushion_contact(c)
             for c in near:
                 if c.kind == "pair" and self.status is None:
                     self.check_pressed_pair(c)
-            if len(self.pressed_pairs) == pressed or self.status is not None:
+            if (frozenset(self.bonds), tuple(self.riding)) == made or self.status is not None:
                 break
+        if collapsed is not None and self.status is None:
+            waiting = [c for c in self.touching() if c.kind == "pair" and self.closing(c)]
+            if waiting:
+                self.stop_pressed(waiting[0])
+                return
         # every touching contact but the one that fired (it has its cooldown, system.TableSystem.cooldown)
         # is opened past round-off, resolved now or not: one whose gap starts a step at zero would
         # close unseen if the motion turns it (a re-roll, friction). The one that fired too where it does not
-        # separate (k = 0): friction closed such a pair 1.4 ms later, beyond the cooldown (random scenes)
+        # separate (k = 0): friction closed such a pair 1.4 ms later, beyond the cooldown (random scenes); and
+        # where a bond made or released at this instant replaced the integrator, whose events have no cooldown
+        # (a ball's bounce off a cushion at the instant a pair let go: its next bounce was missed, random scenes)
+        fresh = self.switched == self.t
         for c in near:
-            if self.fired is None or not _same(c, self.fired) or \
+            if self.fired is None or fresh or not _same(c, self.fired) or \
                     not -self.geometry.approach(c, self.state) > self.round_off * self._speed_scale(c):
                 self.leave(c)
 
@@ -894,7 +995,7 @@ class _Run:
         when the ball is driven into it faster than the grazing limit: slower, the ball settles onto it
         (settle_riders; its normal speed is otherwise round-off: measured, k = 0 met +4.6e-17 again and
         again, 10,000 impacts at one instant)."""
-        if contact.kind == "pair" and self.partner[contact.i] == contact.j:
+        if contact.kind == "pair" and self.bonded_pair(contact.i, contact.j):
             return False  # pressed together: held at contact by its force, never an impact
         speed = self.geometry.approach(contact, self.state)
         if not speed > self.speed_floor:
@@ -955,7 +1056,7 @@ class _Run:
         s = STATE_PER_BALL * contact.i
         nx, ny = contact.normal
         step = self.nudge
-        if self.rides(contact) or (contact.kind == "pair" and self.partner[contact.i] == contact.j):
+        if self.rides(contact) or (contact.kind == "pair" and self.bonded_pair(contact.i, contact.j)):
             return  # it stays on the cushion's curve (at its partner: pressed together); its event is off
         if contact.kind == "wall":
             _, c = self.system.walls[(contact.i, contact.j)]
@@ -992,7 +1093,7 @@ class _Run:
         while queue:
             a = queue.pop()
             for b in range(self.scene.n_bodies):
-                if b in moved or self.partner[a] == b:
+                if b in moved or self.bonded_pair(a, b):
                     continue
                 _, reach = self.system.pairs[(min(a, b), max(a, b))]
                 sa, sb = STATE_PER_BALL * a, STATE_PER_BALL * b
@@ -1039,7 +1140,8 @@ class _Run:
                                      f"normal speed {float(vn / sqrt(speed2)):.3g} of its speed, too slow to resolve its "
                                      f"next impact ({why})")
             return
-        ax, ay = self._free_acceleration(k)  # sliding friction, also a skid's along another wall (a corner)
+        # sliding friction, also a skid's along another wall (a corner); a cluster's member: its bonds' forces too
+        ax, ay = self._present_acceleration(k) if self.ball_bonds[k] else self._free_acceleration(k)
         push = ax * float(nx) + ay * float(ny)
         if push > 0 and (not vn * vn > self.grazing_straight * speed2 or self.pressed(k, vn, speed2, push)):
             if self.system.ride:  # the limit of its bounces: it skids along this wall (a rider: now this one)
@@ -1102,8 +1204,8 @@ class _Run:
                 walls.append(Contact("wall", k, w, normal, distance))
         for c in walls:
             k = c.i
-            if self.riding[k] and not self.rides(c):
-                continue  # another wall of a riding ball (a corner): an ordinary contact
+            if self.riding[k] and (not self.rides(c) or self.ball_bonds[k]):
+                continue  # another wall of a riding ball (a corner): an ordinary contact; its cluster holds it on
             s = STATE_PER_BALL * k
             vx, vy = self.state[s + 2], self.state[s + 3]
             into = vx * c.normal[0] + vy * c.normal[1]
@@ -1131,7 +1233,7 @@ class _Run:
         its gap, v^T H v + grad g . a (a its acceleration without the cushion), is > 0. A rolling ball on a
         convex cushion always is; friction can draw a sliding ball off."""
         gx, gy, curvature = self._gap_terms(k, wall=wall)
-        ax, ay = self._free_acceleration(k)
+        ax, ay = self._present_acceleration(k) if self.ball_bonds[k] else self._free_acceleration(k)
         return curvature + gx * ax + gy * ay > 0
 
     def _gap_terms(self, k: int, shift: float = 0.0, wall: int | None = None) -> tuple:
@@ -1165,9 +1267,9 @@ class _Run:
         """Ball k's acceleration without its cushion (float): its free sliding one, or, skidding, the cloth's
         friction against its slip now."""
         b, s = BALL_PARS * k, STATE_PER_BALL * k
-        if self.partner[k] is not None and not self.slides(k):
-            return 0.0, 0.0  # a rolling member of a pressed pair: no friction of its own
-        if self.pars[b + SKID] == self.zero and self.partner[k] is None:
+        if self.ball_bonds[k] and not self.slides(k):
+            return 0.0, 0.0  # a rolling member of a cluster of bonds: no friction of its own
+        if self.pars[b + SKID] == self.zero and not self.ball_bonds[k]:
             return float(self.pars[b + FVX]), float(self.pars[b + FVY])
         ux, uy = float(self.state[s + 4]), float(self.state[s + 5])
         norm, mu_g = math.hypot(ux, uy), float(self.pars[b + MU_G])
@@ -1181,7 +1283,7 @@ class _Run:
         scenes found two sliding balls whose friction drove them together overlapping after their bounces
         accumulated)."""
         i, j = contact.i, contact.j
-        if self.partner[i] == j or self.let_go.get((i, j)) == self.t:
+        if self.bonded_pair(i, j) or self.let_go.get((i, j)) == self.t:
             return  # pressed together already, or let go at this very instant
         si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
         nx, ny = (float(v) for v in contact.normal)
@@ -1210,15 +1312,9 @@ class _Run:
     def _present_acceleration(self, k: int) -> tuple:
         """Ball k's acceleration now (float): its free one (:meth:`_free_acceleration`) and, riding, the
         cushion's -lambda grad g."""
+        if self.ball_bonds[k]:  # its cluster's contact forces (system._bond_terms, without Baumgarte's terms)
+            return self.bond_forces(bonds_module.cluster_of(self.bonds, k))[1][k]
         ax, ay = self._free_acceleration(k)
-        if self.partner[k] is not None:  # the pair's contact force (system._pressed_terms, without Baumgarte's terms)
-            i, j = sorted((k, self.partner[k]))
-            si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
-            dx, dy = (float(self.state[sj + m] - self.state[si + m]) for m in (0, 1))
-            wi, wj = float(self._mobility(i)), float(self._mobility(j))
-            lam = -self._pair_push(i, j) / ((wi + wj) * (dx * dx + dy * dy))
-            sign, w = (-1, wi) if k == i else (1, wj)
-            return ax + sign * lam * w * dx, ay + sign * lam * w * dy
         if not self.riding[k]:
             return ax, ay
         gx, gy, curvature = self._gap_terms(k)

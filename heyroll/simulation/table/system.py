@@ -73,11 +73,13 @@ into the cushion). No speed is held (friction changes it). Three events:
   rolling ball rolling by its definition (paper section 7.2).
 
 Pressed together (two balls that friction keeps driving into each other after an impact with k < 1: the
-limit of their accumulating bounces, as a rider's on the cushion): a system of its own for the run's pressed
-pairs (``table_system(..., pressed)``, compiled when a pair is first pressed), the scene's plus each pair's
-contact force and its events, "release" (the pair's push through 0), "pair_roll" (a sliding member's slip
-falls to its slip end), "pair_grip" (a rolling member would need more than mu m g: the run stops); see
-_pressed_terms.
+limit of their accumulating bounces, as a rider's on the cushion): a system of its own for the run's bonds
+(``table_system(..., bonds)``, compiled when a set of bonds first occurs; module bonds), the scene's plus the
+coupled contact forces of each cluster of bonds (balls pressed together in a chain, a pair pressed into a
+cushion one of them rides: that rider's cushion force is then the cluster's, not its own) and their events,
+"release" (a pair bond's multiplier through 0), "bond_lift" (a wall bond's), "pair_roll" (a sliding member's
+slip falls to its slip end), "pair_grip" (a rolling member would need more than mu m g: the run stops); see
+_bond_terms.
 
 Events (terminal; the driver resolves them): one per ball and wall (the
 boundary's gap polynomial crossing 0 upwards; the constant -1 while the
@@ -101,6 +103,8 @@ from ...model._numbers import workprec
 from ...model.table import TableScene
 from ..compiled_cache import CompiledCache
 from ..precision import Precision
+from . import bonds as bonds_module
+from .bonds import bond_balls
 
 #: Parameters per ball: accelerations of v and of u, sliding flag s, slip direction d, riding flag r, while
 #: rolling on the cushion the square of the speed V^2 and the rate c = alpha / (2 V^2) that holds it (0 at
@@ -114,14 +118,16 @@ STATE_PER_BALL = 6
 #: that rolls) never divides 0 by 0; 2^-1000 is far below any slip the run resolves (SLIP_END^2 ~ 1e-26).
 TINY = 2.0**-1000
 
-#: Parameters of a pressed pair (i, j), appended after the scene's (``TableSystem.pressed``): each member
-#: slides (1) or rolls (0); its translational mobility w = 1/m sliding (the contact force goes through the
-#: centre and leaves the spin), 1/(kappa m) rolling; its grip watched (a rolling member); (R_i + R_j)^2;
-#: Baumgarte's alpha; the slip at which a member's slide ends.
-P_SI, P_SJ, P_WI, P_WJ, P_GI, P_GJ, P_REACH2, P_ALPHA, P_SLIP_END = range(9)
-PRESS_PARS = 9
+#: Parameters of a run's bonds (``table_system(..., bonds)``), appended after the scene's
+#: (``TableSystem.bond_pars``): Baumgarte's alpha and the slip at which a member's slide ends; then per member
+#: ball (``TableSystem.members``) whether it slides (1) or rolls (0), its translational mobility w (1/m sliding:
+#: the contact forces go through the centre and leave the spin; 1/(kappa m) rolling) and whether its grip is
+#: watched (a rolling member); then per pair bond (R_i + R_j)^2 (``TableSystem.reaches``).
+B_ALPHA, B_SLIP_END = range(2)
+M_SLIDING, M_MOBILITY, M_GRIP = range(3)
+MEMBER_PARS = 3
 
-_INTEGRATORS = CompiledCache(16)
+_INTEGRATORS = CompiledCache(64)  # (a run with clusters of bonds compiles a system per set: 32 in a random scene)
 #: Shift of a pair's contact event inside the contact, in ulps of (R_i + R_j)^2 (system.table_system): off the
 #: round numbers where heyoka's root isolation lost a root, and polished back (driver._Run.polish_pair).
 PAIR_EVENT_SHIFT = 16
@@ -170,8 +176,12 @@ class TableSystem:
     grips: tuple = ()
     #: (ball, wall) -> parameter index of the flag: the ball rides that wall (riding systems)
     ride_flags: dict = None
-    #: pressed pairs (i, j) -> the first of their PRESS_PARS parameters (system.table_system's ``pressed``)
-    pressed: dict = None
+    #: the run's bonds (module bonds), the first of their parameters (B_ALPHA, ...), per member ball the first
+    #: of its MEMBER_PARS, per pair bond the index of its (R_i + R_j)^2
+    bonds: tuple = ()
+    bond_pars: int = -1
+    members: dict = None
+    reaches: dict = None
 
     @property
     def n_balls(self) -> int:
@@ -206,10 +216,10 @@ def can_ride(scene: TableScene) -> bool:
     return curved or sliding
 
 
-def table_system(scene: TableScene, precision: Precision, pressed: tuple = ()) -> TableSystem:
-    """The layout of ``scene``'s system; with ``pressed`` (disjoint pairs (i, j), i < j) the same one plus the
-    contact force of each pair pressed together and its events (module docstring), its parameters after the
-    scene's, so that a run switches between the two keeping its parameter vector."""
+def table_system(scene: TableScene, precision: Precision, bonds: tuple = ()) -> TableSystem:
+    """The layout of ``scene``'s system; with ``bonds`` (sorted, module bonds) the same one plus the contact
+    forces of each cluster of bonds and their events (module docstring), their parameters after the scene's, so
+    that a run switches between the two keeping its parameter vector."""
     num = precision.number
     n = scene.n_bodies
     pars: list = []
@@ -264,23 +274,28 @@ def table_system(scene: TableScene, precision: Precision, pressed: tuple = ()) -
         events += [TableEvent("lift", k) for k in range(n) if rolls[k]]
         grips = tuple(rolls[k] and needs_grip(scene, k) for k in range(n))
         events += [TableEvent("grip", k) for k in range(n) if grips[k]]
-    blocks = {}
-    for i, j in pressed:
-        blocks[(i, j)] = len(pars)
-        with workprec():  # (R_i + R_j)^2 at the model's precision (at mpmath's global 53 bits a quad run held
-            reach = scene.balls[i].body.radius + scene.balls[j].body.radius  # the pair 8e-19 too far: overlap)
-            reach2 = reach * reach
-        block = [num(0)] * PRESS_PARS
-        block[P_REACH2] = num(reach2)
-        block[P_ALPHA] = num(1 / crossing)
-        block[P_SLIP_END] = num(2.0**10 * precision.epsilon * _extent_size(scene) / crossing)
-        pars += block
-        events += [TableEvent("release", i, j), TableEvent("pair_roll", i, j), TableEvent("pair_roll", j, i),
-                   TableEvent("pair_grip", i, j), TableEvent("pair_grip", j, i)]
-    shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown, ride, grips, tuple(pressed))
+    members, reaches, bond_pars = {}, {}, -1
+    if bonds:
+        bond_pars = len(pars)
+        pars += [num(1 / crossing), num(2.0**10 * precision.epsilon * _extent_size(scene) / crossing)]
+        balls = sorted({k for bond in bonds for k in bond_balls(bond)})
+        for k in balls:
+            members[k] = len(pars)
+            pars += [num(0)] * MEMBER_PARS
+        for bond in bonds:
+            if bond[0] == "pair":
+                with workprec():  # (R_i + R_j)^2 at the model's precision (at mpmath's global 53 bits a quad run
+                    reach = scene.balls[bond[1]].body.radius + scene.balls[bond[2]].body.radius  # held a pair
+                    reach2 = reach * reach  # 8e-19 too far: overlap)
+                reaches[bond] = len(pars)
+                pars.append(num(reach2))
+        events += [TableEvent("release" if bond[0] == "pair" else "bond_lift", bond[1], bond[2]) for bond in bonds]
+        events += [TableEvent("pair_roll", k) for k in balls] + [TableEvent("pair_grip", k) for k in balls]
+    shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown, ride, grips, tuple(bonds))
     return TableSystem(events=tuple(events), walls=walls, pairs=pairs, pars=tuple(pars), rolls=rolls, shape=shape,
                        cooldown=cooldown, max_step=crossing, ride=ride, alpha=alpha, slip_end=slip_end, grips=grips,
-                       ride_flags=ride_flags, pressed=blocks)
+                       ride_flags=ride_flags, bonds=tuple(bonds), bond_pars=bond_pars, members=members,
+                       reaches=reaches)
 
 
 def _crossing_time(scene: TableScene) -> float:
@@ -331,17 +346,16 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
     par = hy.par
     equations = []
     cushion = {}  # ball -> its cushion terms (riding systems)
-    contact = {}  # member of a pressed pair -> the accelerations of v and u its pair adds
-    press = {(i, j): _pressed_terms(system, i, j, var) for (i, j) in (system.pressed or {})}
-    for (i, j), terms in press.items():
-        contact[i], contact[j] = terms.member_i, terms.member_j
+    press = _bond_terms(scene, system, var) if system.bonds else None
+    contact = press.added if press is not None else {}  # member of a cluster -> the accelerations of v and u
+    held = {(bond[1], bond[2]) for bond in system.bonds if bond[0] == "wall"}  # its cluster holds it there
     for k in range(n):
         x, y, vx, vy, ux, uy = var[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
         base = BALL_PARS * k
         ax, ay = par[base + FVX], par[base + FVY]
         bx, by = par[base + FUX], par[base + FUY]
         if system.ride:
-            terms = cushion[k] = _cushion_terms(scene, system, k, (x, y, vx, vy, ux, uy))
+            terms = cushion[k] = _cushion_terms(scene, system, k, (x, y, vx, vy, ux, uy), held)
             ax, ay = ax + terms.ax, ay + terms.ay
             bx, by = bx + terms.bx, by + terms.by
         if k in contact:
@@ -389,25 +403,22 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
             spin, mu_g = par[base + SPIN], par[base + MU_G]
             excess = spin * spin * terms.curvature * terms.curvature - mu_g * mu_g * terms.gradient2
             events.append(hy.t_event(armed * excess - (1. - armed), direction=positive, **typed))
-        elif ev.kind == "release":  # the pair's push through 0: its contact force vanishes
-            events.append(hy.t_event(press[(k, ev.other)].push, direction=positive, **typed))
-        else:  # pair_roll, pair_grip of member k (ball) of the pair it forms with ev.other
-            key = (min(k, ev.other), max(k, ev.other))
-            terms, first = press[key], system.pressed[key]
-            own = 0 if k == key[0] else 1
-            if ev.kind == "pair_roll":  # a sliding member's slip falls to the slip end: it rolls
-                sliding = par[first + P_SI + own]
-                events.append(hy.t_event(sliding * (terms.slips[own] - par[first + P_SLIP_END]) + (1. - sliding),
-                                         direction=negative, **typed))
-            else:  # a rolling member needs more of the cloth's friction than mu m g to roll on: (kappa - 1) A > mu g
-                base = BALL_PARS * k
-                armed = par[first + P_GI + own]
-                excess = par[base + SPIN] * terms.pushes[own] - par[base + MU_G]
-                events.append(hy.t_event(armed * excess - (1. - armed), direction=positive, **typed))
+        elif ev.kind in ("release", "bond_lift"):  # a bond's multiplier (without Baumgarte's terms) through 0
+            events.append(hy.t_event(press.holds[system.bonds.index(_bond_of(ev))], direction=negative, **typed))
+        elif ev.kind == "pair_roll":  # a sliding member's slip falls to the slip end: it rolls
+            sliding = par[system.members[k] + M_SLIDING]
+            events.append(hy.t_event(sliding * (press.slips[k] - par[system.bond_pars + B_SLIP_END]) + (1. - sliding),
+                                     direction=negative, **typed))
+        else:  # pair_grip: a rolling member needs more of the cloth's friction than mu m g: (kappa - 1) |a| > mu g
+            base = BALL_PARS * k
+            armed = par[system.members[k] + M_GRIP]
+            excess = par[base + SPIN] * par[base + SPIN] * press.grips[k] - par[base + MU_G] * par[base + MU_G]
+            events.append(hy.t_event(armed * excess - (1. - armed), direction=positive, **typed))
     # finite balls in an ellipse: one degree-8 gap polynomial per ball; from 3 balls on compact mode compiles in
     # 0.4 s where the default took 1.3 s (3 balls), 3.4 s (5), 46 s (7), at the same speed after (measured)
     conic = any(len(v) > 2 for _, v in system.walls.values())
-    big = len(events) > COMPACT_EVENTS or (conic and n > 2) or (system.ride and (n > 1 or conic))
+    big = len(events) > COMPACT_EVENTS or (conic and n > 2) or (system.ride and (n > 1 or conic)) or \
+        len(system.bonds) > 2
     if big and "compact_mode" not in options:
         options = dict(options, compact_mode=True)
     return hy.taylor_adaptive(equations, list(state), pars=list(system.pars), t_events=events, **options)
@@ -428,10 +439,11 @@ class _CushionTerms:
     gradient2: object
 
 
-def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables) -> _CushionTerms:
+def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables, held=()) -> _CushionTerms:
     """The cushion's constraint acceleration -r lambda grad g on ball k and, while it skids, the cloth's
     friction along the turning slip (module docstring), summed over its walls, each with its flag r (one is
-    1 while the ball rides it).
+    1 while the ball rides it); not over the walls ``held`` by a cluster of bonds (their force is the cluster's:
+    _bond_terms).
 
     Where the ball does not ride a wall (r = 0) the denominator is |grad g|^2 + 1, never 0 (grad g vanishes at
     the centre of an ellipse), and the term is multiplied by 0; a ball that does not skid (flag 0) has the
@@ -444,11 +456,9 @@ def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables) ->
     fx, fy = -skid * par[base + MU_G] * ux / slip, -skid * par[base + MU_G] * uy / slip
     cx = cy = pressing = curvature = gradient2 = 0.
     for w in range(scene.boundary.n_walls()):
-        first, values = system.walls[(k, w)]
-        c = [par[first + m] for m in range(len(values))]
-        g = scene.boundary.gap(w, x, y, c)
-        gx, gy = hy.diff(g, x), hy.diff(g, y)
-        gxx, gxy, gyy = hy.diff(gx, x), hy.diff(gx, y), hy.diff(gy, y)
+        if (k, w) in held:
+            continue
+        g, gx, gy, gxx, gxy, gyy = _gap_derivatives(scene, system, k, w, x, y)
         riding = par[system.ride_flags[(k, w)]]
         bend = vx * vx * gxx + 2. * vx * vy * gxy + vy * vy * gyy
         press = bend + gx * fx + gy * fy
@@ -463,51 +473,87 @@ def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables) ->
                          gradient2=gradient2)
 
 
+def _gap_derivatives(scene: TableScene, system: TableSystem, k: int, w: int, x, y) -> tuple:
+    """Ball k's gap g to wall w (heyoka expressions of its centre x, y), its gradient and Hessian."""
+    first, values = system.walls[(k, w)]
+    g = scene.boundary.gap(w, x, y, [hy.par[first + m] for m in range(len(values))])
+    gx, gy = hy.diff(g, x), hy.diff(g, y)
+    return g, gx, gy, hy.diff(gx, x), hy.diff(gx, y), hy.diff(gy, y)
+
+
+def _bond_of(event: TableEvent) -> tuple:
+    return ("pair" if event.kind == "release" else "wall", event.ball, event.other)
+
+
 @dataclass(frozen=True)
-class _PressedTerms:
-    """A pressed pair's terms (heyoka expressions): each member's added (v', u') as (ax, ay, bx, by), the
-    push |dv|^2 + dc . (f_j - f_i) (negative while the pair is pressed), each member's slip size and the
-    acceleration A = Lambda w |dc| the contact gives it."""
+class _BondTerms:
+    """The terms of a run's bonds (heyoka expressions): per member ball the added (v', u') as (ax, ay, bx, by),
+    its slip's size and |a|^2 of the part of its contact acceleration that the cloth's friction must make
+    (pair_grip); per bond (``TableSystem.bonds`` order) its multiplier without Baumgarte's terms (release)."""
 
-    member_i: tuple
-    member_j: tuple
-    push: object
-    slips: tuple
-    pushes: tuple
+    added: dict
+    slips: dict
+    grips: dict
+    holds: list
 
 
-def _pressed_terms(system: TableSystem, i: int, j: int, var) -> _PressedTerms:
-    """Balls i and j pressed together (the limit of their accumulating impacts, k < 1, as a rider's on a
-    cushion): the centres held at |c_j - c_i| = R_i + R_j by a contact force Lambda dc along dc = c_j - c_i,
-    pushing them apart, a_i = f_i - Lambda w_i dc, a_j = f_j + Lambda w_j dc, with
-
-        Lambda = -(|dv|^2 + dc . (f_j - f_i) + 2 alpha dc . dv + alpha^2 C / 2) / ((w_i + w_j) |dc|^2),
-
-    C = |dc|^2 - (R_i + R_j)^2, which keeps C'' = -2 alpha C' - alpha^2 C (Baumgarte, as on the cushion).
-    f is a sliding member's friction against its slip, -mu g u/|u|, its direction turning with the slip (the
-    contact force goes through the centre: it changes v and u alike, not the spin); a rolling member has none
-    and mobility w = 1/(kappa m). No ball-ball friction. The force does no work (dc . dv = 0 on the contact)."""
+def _bond_terms(scene: TableScene, system: TableSystem, var) -> _BondTerms:
+    """Each cluster of bonds held closed by its coupled contact forces (module bonds): a_k = f_k + w_k sum_e
+    lambda_e n_ek with A lambda = r - J f, r holding C'' = -2 alpha C' - alpha^2 C (Baumgarte, as on the
+    cushion). f is a sliding member's friction against its slip, -mu g u/|u|, its direction turning with the
+    slip (the contact forces go through the centre: they change v and u alike, not the spin); a rolling member
+    has none and mobility w = 1/(kappa m). No ball-ball or ball-cushion friction. The forces do no work
+    (J v = 0 on the bonds). One pair bond alone: lambda = -(|dv|^2 + dc . (f_j - f_i) + 2 alpha dc . dv +
+    alpha^2 C / 2) / ((w_i + w_j) |dc|^2)."""
     par = hy.par
-    first = system.pressed[(i, j)]
-    members = []
-    for k, own in ((i, 0), (j, 1)):
+    alpha = par[system.bond_pars + B_ALPHA]
+    mobility, free, free_u, sliding, slips = {}, {}, {}, {}, {}
+    for k, first in system.members.items():
         x, y, vx, vy, ux, uy = var[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
-        sliding = par[first + P_SI + own]
-        slip = hy.sqrt(ux * ux + uy * uy + (1. - sliding) + TINY)
+        s = sliding[k] = par[first + M_SLIDING]
+        slip = slips[k] = hy.sqrt(ux * ux + uy * uy + (1. - s) + TINY)
         base = BALL_PARS * k
-        f = (-sliding * par[base + MU_G] * ux / slip, -sliding * par[base + MU_G] * uy / slip)
-        fu = (-sliding * par[base + MU_G_U] * ux / slip, -sliding * par[base + MU_G_U] * uy / slip)
-        members.append((x, y, vx, vy, sliding, slip, f, fu, par[first + P_WI + own]))
-    (xi, yi, vxi, vyi, si, slip_i, fi, fui, wi), (xj, yj, vxj, vyj, sj, slip_j, fj, fuj, wj) = members
-    dx, dy, dvx, dvy = xj - xi, yj - yi, vxj - vxi, vyj - vyi
-    alpha = par[first + P_ALPHA]
-    push = dvx * dvx + dvy * dvy + dx * (fj[0] - fi[0]) + dy * (fj[1] - fi[1])
-    d2 = dx * dx + dy * dy
-    lam = -(push + 2. * alpha * (dx * dvx + dy * dvy) + alpha * alpha * (d2 - par[first + P_REACH2]) / 2.) / \
-        ((wi + wj) * d2)
-    member_i = (fi[0] - lam * wi * dx, fi[1] - lam * wi * dy, fui[0] - si * lam * wi * dx, fui[1] - si * lam * wi * dy)
-    member_j = (fj[0] + lam * wj * dx, fj[1] + lam * wj * dy, fuj[0] + sj * lam * wj * dx, fuj[1] + sj * lam * wj * dy)
-    distance = hy.sqrt(d2)
-    return _PressedTerms(member_i=member_i, member_j=member_j, push=push, slips=(slip_i, slip_j),
-                         pushes=(lam * wi * distance, lam * wj * distance))
-
+        free[k] = (-s * par[base + MU_G] * ux / slip, -s * par[base + MU_G] * uy / slip)
+        free_u[k] = (-s * par[base + MU_G_U] * ux / slip, -s * par[base + MU_G_U] * uy / slip)
+        mobility[k] = par[first + M_MOBILITY]
+    directions, targets, plain = [], [], []
+    for bond in system.bonds:
+        if bond[0] == "pair":
+            _, i, j = bond
+            xi, yi, vxi, vyi = var[STATE_PER_BALL * i:STATE_PER_BALL * i + 4]
+            xj, yj, vxj, vyj = var[STATE_PER_BALL * j:STATE_PER_BALL * j + 4]
+            dx, dy, dvx, dvy = xj - xi, yj - yi, vxj - vxi, vyj - vyi
+            directions.append({i: (-dx, -dy), j: (dx, dy)})
+            quad = dvx * dvx + dvy * dvy
+            plain.append(-quad)
+            targets.append(-(quad + 2. * alpha * (dx * dvx + dy * dvy) +
+                             alpha * alpha * (dx * dx + dy * dy - par[system.reaches[bond]]) / 2.))
+        else:
+            _, k, w = bond
+            x, y, vx, vy = var[STATE_PER_BALL * k:STATE_PER_BALL * k + 4]
+            g, gx, gy, gxx, gxy, gyy = _gap_derivatives(scene, system, k, w, x, y)
+            directions.append({k: (-gx, -gy)})
+            bend = vx * vx * gxx + 2. * vx * vy * gxy + vy * vy * gyy
+            plain.append(bend)
+            targets.append(bend + 2. * alpha * (gx * vx + gy * vy) + alpha * alpha * g)
+    work = bonds_module.free_work(directions, free)
+    added, grips, holds = {}, {}, [None] * len(system.bonds)
+    for group in bonds_module.clusters(system.bonds):
+        index = [system.bonds.index(b) for b in group]
+        ds = [directions[e] for e in index]
+        matrix = bonds_module.bond_matrix(ds, mobility)
+        lam, lam0 = bonds_module.solve(matrix, [[targets[e] - work[e] for e in index],
+                                                [plain[e] - work[e] for e in index]])
+        for e, value in zip(index, lam0):
+            holds[e] = value
+        contact = bonds_module.pushes(ds, mobility, lam)
+        # the cushion's part needs no friction where its model keeps a ball rolling (paper section 7.2)
+        gripped = [(d, m) for d, m, b in zip(ds, lam, group) if b[0] == "pair" or not scene.cushion.keeps_rolling]
+        needs = bonds_module.pushes([d for d, _ in gripped], mobility, [m for _, m in gripped])
+        for k, (ax, ay) in contact.items():
+            fx, fy = free[k]
+            fux, fuy = free_u[k]
+            added[k] = (fx + ax, fy + ay, fux + sliding[k] * ax, fuy + sliding[k] * ay)
+            nx, ny = needs.get(k, (0., 0.))
+            grips[k] = nx * nx + ny * ny
+    return _BondTerms(added=added, slips=slips, grips=grips, holds=holds)
