@@ -233,3 +233,19 @@ def test_newton_and_slide_laws_at_k0_never_fall_back():
                                       [striker, ball("-0.5", "0.05", "0", "0")], law=law, k="0", friction="0.2",
                                       cushion_k="0.9", t_end=8))
         assert 1 not in list(result.collision_table()["law_flag"])
+
+
+@pytest.mark.parametrize("spin", ["-1e-3", "-1e-2", "-1"])
+def test_a_slow_skid_out_of_a_corner_ends_its_slip(spin):
+    """A ball at rest in a corner of a 2 m table with a slip of 1e-4 m/s whose friction drives it into the top
+    cushion and out of the corner: it skids along that cushion until its slip ends. The skid's end (SLIP_END, 2^10
+    ulps of the top speed, ~2e-17 m/s here) lay under heyoka's resolution, set by the positions: the slip passed
+    through 0 and the run failed with a non-finite state. Along the wall u_x' = kappa/(kappa - 1) f_x at every
+    instant, so the ball leaves at v_x = -(kappa - 1)/kappa u_x(0) whatever the slip's turning."""
+    b = dict(ball("0.9", "0.9", "0", "0"), wx=spin, wy=spin)  # u = (-R w_y, R w_x) = (0.1 |w|, -0.1 |w|)
+    result = simulate(table_scene('boundary = "rectangle"\nwidth = 2.0\nheight = 2.0', [b], law="newton", k="0",
+                                  cushion_k="0", friction="0.2", t_end=2.0))
+    assert result.status is Status.COMPLETED, result.message
+    ux0 = -0.1 * float(spin)
+    assert float(result.state_final[2]) == pytest.approx(-(0.4 / 1.4) * ux0, rel=1e-10)
+    assert list(result.state_final[3:6]) == [0.0, 0.0, 0.0] and result.energy_final < result.energy_initial

@@ -268,7 +268,7 @@ def table_system(scene: TableScene, precision: Precision, bonds: tuple = ()) -> 
             ride_flags[key] = len(pars)
             pars.append(num(0))
         slip_end = len(pars)  # before alpha, which every riding system uses last (heyoka counts them)
-        pars.append(num(2.0**10 * precision.epsilon * _extent_size(scene) / crossing))
+        pars.append(num(_slip_end(scene, precision, crossing)))
         alpha = len(pars)
         pars.append(num(1 / crossing))
         events += [TableEvent("lift", k) for k in range(n) if rolls[k]]
@@ -277,7 +277,7 @@ def table_system(scene: TableScene, precision: Precision, bonds: tuple = ()) -> 
     members, reaches, bond_pars = {}, {}, -1
     if bonds:
         bond_pars = len(pars)
-        pars += [num(1 / crossing), num(2.0**10 * precision.epsilon * _extent_size(scene) / crossing)]
+        pars += [num(1 / crossing), num(_slip_end(scene, precision, crossing))]
         balls = sorted({k for bond in bonds for k in bond_balls(bond)})
         for k in balls:
             members[k] = len(pars)
@@ -307,6 +307,15 @@ def _crossing_time(scene: TableScene) -> float:
     top_speed = math.sqrt(2 * energy / lightest) if energy > 0 else 0.0
     size = _extent_size(scene)
     return size / top_speed if top_speed > 0 else 1.0
+
+
+def _slip_end(scene: TableScene, precision: Precision, crossing: float) -> float:
+    """The slip at which a skid (or a cluster member's slide) ends: 2^10 ulps of the scene's top speed, and not
+    under 2^10 ulps of the table's size taken as a number: heyoka controls the error on the state's largest
+    component, the positions where the balls are slow, and a slip under that resolution is not followed to its
+    end (a ball skidding from a slip of 1e-3 m/s in a corner of a 2 m table passed through slip 0: NaN, review)."""
+    size = _extent_size(scene)
+    return 2.0**10 * precision.epsilon * max(size / crossing, size)
 
 
 def _extent_size(scene: TableScene) -> float:
