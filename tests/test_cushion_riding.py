@@ -261,10 +261,17 @@ def test_review_cases_of_riding():
     assert slip.energy_final == pytest.approx(slip.energy_initial, rel=1e-14)
     vx, vy, ux, uy = slip.state_final[2:6]
     assert (vx - ux, vy - uy) == (0.0, 0.0)  # no spin, as it started
-    # a riding ball turned by its cushion into a ball touching it: pressed together, not modelled (was: overlap)
+    # a riding ball turned by its cushion into a ball touching it (was: overlap; then 'pressed together, not
+    # modelled'): their impacts accumulate, the pair is pressed together with the rider on its cushion (a cluster of
+    # two bonds) until it lets go; both end riding, the energy only falls
     pressed = simulate(table_scene(CIRCLE, [ball("0.9", "0", "0", "1", mass="1"), ball("0.69", "0", "0", "1", mass="1")],
                                    cushion_k="0.3", t_end=3))
-    assert pressed.status is Status.FAILED and "pressed together" in pressed.message
+    assert pressed.status is Status.COMPLETED and pressed.riding_final == (1, 2), pressed.message
+    table = pressed.collision_table()
+    assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
+    assert any((table["law_flag"] == 4) & (table["j"] == 2))  # pressed together once
+    s = np.array(pressed.state_final, float).reshape(-1, 6)
+    assert np.hypot(*(s[0, :2] - s[1, :2])) > 0.2 and np.allclose(np.hypot(s[:, 0], s[:, 1]), 0.9, atol=1e-12)
     # k = 0: the normal speed left by the impact is round-off (+4.6e-17 into the cushion): it settles
     k0 = simulate(table_scene(CIRCLE, [ball("0.4296553195975211", "0.4420438294276994", "-0.31123637389397607",
                                             "-0.29041358988417554", radius="0.05")], cushion_k="0", t_end=5))
@@ -402,7 +409,8 @@ def test_a_slide_model_cushion_at_k_1_still_settles_a_ball():
 def test_two_riders_the_cushion_turns_into_each_other_stop_the_run():
     """Random scenes: two balls riding an ellipse met; resolved (with their cushions), settled back onto it, they
     met again at the same instant, 10,000 times ('inelastic collapse'). After 32 such resolutions at one instant
-    the run stops: balls pressed together are not modelled."""
+    the pair is pressed together where it is driven together with no bounce left to resolve; otherwise the run
+    stops."""
     balls = [{"shape": "hollow_sphere", "radius": "0.06", "mass": "1.0", "x": "-0.4168059802300979",
               "y": "0.36153027707049457", "vx": "-0.12616645478367985", "vy": "0.42950357986582643"},
              {"shape": "disk", "radius": "0.03", "mass": "0.17", "x": "-0.3939185035320094", "y": "0.1535040802836416",
@@ -411,5 +419,6 @@ def test_two_riders_the_cushion_turns_into_each_other_stop_the_run():
               "y": "0.24841092036727075", "vx": "-1.53537510268215", "vy": "0.061140105373698045"}]
     result = simulate(table_scene(ELLIPSE, balls, law="slide", k="1", cushion_k="0", simultaneous="impulses",
                                   t_end=20))
+    # (their pair is elastic: the repeats do not shrink to a press, bonds.py cannot hold them; the run says why)
     assert result.status is Status.FAILED and "balls 2 and 3 stay pressed together" in result.message
-    assert "rides the cushion" in result.message and result.n_collisions < 1000
+    assert "a cushion turns a riding ball into the other" in result.message and result.n_collisions < 1000

@@ -26,6 +26,8 @@ its multiplier without Baumgarte's terms falls through 0.
 
 from __future__ import annotations
 
+import itertools
+
 #: The most bonds in one cluster: elimination on expressions grows as m^3 (a rack pressed together is refused
 #: with this number in the message rather than compiled for minutes).
 MAX_CLUSTER_BONDS = 8
@@ -56,6 +58,54 @@ def cluster_of(bonds, ball: int) -> list:
         if any(ball in bond_balls(b) for b in group):
             return group
     return []
+
+
+def topology(bonds, wall_shape) -> tuple:
+    """The run's bonds as a shape that does not name the balls: what the compiled system depends on, so that
+    one compiled system serves every set of bonds of the same shape (a chain of two pairs anywhere on the table;
+    a 16-ball break met 60 different sets, each compiled for 0.1-1 s). Returns (local bonds, members, slots):
+    the local bonds ``("pair", a, b)`` (a < b) and ``("wall", a, n)`` (n = ``wall_shape(ball, wall)``, the
+    number of the wall's constants: its gap's form) over local members 0, 1, ...; ``members`` the actual ball of
+    each local member; ``slots`` the actual bond of each local bond. Each cluster is labelled so that its
+    local bonds are least (all orders of up to 6 members tried: isomorphic clusters share a shape), the
+    clusters in the order of their forms."""
+    labelled = []
+    for group in clusters(bonds):
+        balls = sorted({k for bond in group for k in bond_balls(bond)})
+        orders = itertools.permutations(balls) if len(balls) <= 6 else [_first_seen(group)]
+        best = None
+        for order in orders:
+            label = {k: n for n, k in enumerate(order)}
+            form = sorted((_local(bond, label, wall_shape), bond) for bond in group)
+            key = tuple(f for f, _ in form)
+            if best is None or key < best[0]:
+                best = (key, form, order)
+        labelled.append(best)
+    labelled.sort(key=lambda item: item[0])
+    local, members, slots = [], [], []
+    for key, form, order in labelled:
+        shift = len(members)
+        members += list(order)
+        for (kind, a, b), bond in form:
+            local.append((kind, a + shift, b + shift) if kind == "pair" else (kind, a + shift, b))
+            slots.append(bond)
+    return tuple(local), tuple(members), tuple(slots)
+
+
+def _local(bond: tuple, label: dict, wall_shape) -> tuple:
+    if bond[0] == "pair":
+        a, b = sorted((label[bond[1]], label[bond[2]]))
+        return ("pair", a, b)
+    return ("wall", label[bond[1]], wall_shape(bond[1], bond[2]))
+
+
+def _first_seen(group: list) -> list:
+    order: list = []
+    for bond in group:
+        for k in bond_balls(bond):
+            if k not in order:
+                order.append(k)
+    return order
 
 
 def bond_matrix(directions: list, mobility: dict) -> list:

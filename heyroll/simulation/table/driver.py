@@ -23,7 +23,7 @@ from .bonds import MAX_CLUSTER_BONDS, bond_balls
 from .contacts import Contact, ContactGeometry
 from .resolve import SETTLED, SIMULTANEOUS, Resolver
 from .result import TableResult
-from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, M_GRIP, M_MOBILITY, M_SLIDING, MODE_PARS, MU_G,
+from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, HELD, M_GRIP, M_MOBILITY, M_SLIDING, MODE_PARS, MU_G,
                      RIDE_HOLD, RIDE_SPEED2, RIDING, SKID, SLIDING, SPIN, STATE_PER_BALL, integrator, needs_grip,
                      table_system)
 
@@ -356,7 +356,8 @@ class _Run:
             sliding = False
         self.pars[b:b + MODE_PARS] = [zero] * MODE_PARS
         if self.system.ride:
-            walls = self.held_walls(k)  # bonds: their events off, their forces the cluster's
+            walls = self.held_walls(k)
+            self.pars[b + HELD] = zero + 1 if walls else zero  # bonds: their events off, their forces the cluster's
             for w in range(self.scene.boundary.n_walls()):
                 self.pars[self.system.ride_flags[(k, w)]] = zero + 1 if w in walls else zero
         first = self.system.members.get(k)

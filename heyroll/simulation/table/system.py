@@ -104,15 +104,15 @@ from ...model.table import TableScene
 from ..compiled_cache import CompiledCache
 from ..precision import Precision
 from . import bonds as bonds_module
-from .bonds import bond_balls
 
 #: Parameters per ball: accelerations of v and of u, sliding flag s, slip direction d, riding flag r, while
 #: rolling on the cushion the square of the speed V^2 and the rate c = alpha / (2 V^2) that holds it (0 at
-#: rest), the skid flag (riding and sliding) and the armed grip event (the first MODE_PARS, set by the driver
-#: per mode); then the ball's constants: mu g, mu g kappa/(kappa - 1) and kappa - 1 (module docstring).
-FVX, FVY, FUX, FUY, SLIDING, DX, DY, RIDING, RIDE_SPEED2, RIDE_HOLD, SKID, GRIP, MU_G, MU_G_U, SPIN = range(15)
-MODE_PARS = 12
-BALL_PARS = 15
+#: rest), the skid flag (riding and sliding), the armed grip event and the held flag (a cluster of bonds holds
+#: it on its cushion: its own cushion force off, its wall events still off; the first MODE_PARS, set by the
+#: driver per mode); then the ball's constants: mu g, mu g kappa/(kappa - 1) and kappa - 1 (module docstring).
+FVX, FVY, FUX, FUY, SLIDING, DX, DY, RIDING, RIDE_SPEED2, RIDE_HOLD, SKID, GRIP, HELD, MU_G, MU_G_U, SPIN = range(16)
+MODE_PARS = 13
+BALL_PARS = 16
 STATE_PER_BALL = 6
 #: Added to |u|^2 under the square root of a skid's friction direction: u = 0 (a frictionless skid, a rider
 #: that rolls) never divides 0 by 0; 2^-1000 is far below any slip the run resolves (SLIP_END^2 ~ 1e-26).
@@ -120,12 +120,14 @@ TINY = 2.0**-1000
 
 #: Parameters of a run's bonds (``table_system(..., bonds)``), appended after the scene's
 #: (``TableSystem.bond_pars``): Baumgarte's alpha and the slip at which a member's slide ends; then per member
-#: ball (``TableSystem.members``) whether it slides (1) or rolls (0), its translational mobility w (1/m sliding:
-#: the contact forces go through the centre and leave the spin; 1/(kappa m) rolling) and whether its grip is
-#: watched (a rolling member); then per pair bond (R_i + R_j)^2 (``TableSystem.reaches``).
+#: ball (``TableSystem.members``, in the order of the bonds' shape: bonds.topology) whether it slides (1) or
+#: rolls (0), its translational mobility w (1/m sliding: the contact forces go through the centre and leave the
+#: spin; 1/(kappa m) rolling), whether its grip is watched (a rolling member), its mu g, mu g kappa/(kappa - 1)
+#: and kappa - 1, and n numbers that select its ball (1 for it, 0 for the others: the compiled system names no
+#: ball); then per bond (``TableSystem.slot_pars``) a pair's (R_i + R_j)^2 or a wall's constants.
 B_ALPHA, B_SLIP_END = range(2)
-M_SLIDING, M_MOBILITY, M_GRIP = range(3)
-MEMBER_PARS = 3
+M_SLIDING, M_MOBILITY, M_GRIP, M_MU_G, M_MU_G_U, M_SPIN = range(6)
+MEMBER_PARS = 6
 
 _INTEGRATORS = CompiledCache(64)  # (a run with clusters of bonds compiles a system per set: 32 in a random scene)
 #: Shift of a pair's contact event inside the contact, in ulps of (R_i + R_j)^2 (system.table_system): off the
@@ -176,12 +178,16 @@ class TableSystem:
     grips: tuple = ()
     #: (ball, wall) -> parameter index of the flag: the ball rides that wall (riding systems)
     ride_flags: dict = None
-    #: the run's bonds (module bonds), the first of their parameters (B_ALPHA, ...), per member ball the first
-    #: of its MEMBER_PARS, per pair bond the index of its (R_i + R_j)^2
+    #: the run's bonds (module bonds) in the order of their shape (``topology``: bonds.topology, what is
+    #: compiled), the first of their parameters (B_ALPHA, ...), per member ball the first of its MEMBER_PARS (and
+    #: the same in the shape's order of members), per bond the first of its parameters, the first bond event
     bonds: tuple = ()
     bond_pars: int = -1
     members: dict = None
-    reaches: dict = None
+    topology: tuple = ()
+    member_pars: tuple = ()
+    slot_pars: tuple = ()
+    first_bond_event: int = 0
 
     @property
     def n_balls(self) -> int:
@@ -274,28 +280,34 @@ def table_system(scene: TableScene, precision: Precision, bonds: tuple = ()) -> 
         events += [TableEvent("lift", k) for k in range(n) if rolls[k]]
         grips = tuple(rolls[k] and needs_grip(scene, k) for k in range(n))
         events += [TableEvent("grip", k) for k in range(n) if grips[k]]
-    members, reaches, bond_pars = {}, {}, -1
+    members, bond_pars, local, member_pars, slot_pars, first_bond_event = {}, -1, (), [], [], len(events)
     if bonds:
         bond_pars = len(pars)
         pars += [num(1 / crossing), num(_slip_end(scene, precision, crossing))]
-        balls = sorted({k for bond in bonds for k in bond_balls(bond)})
-        for k in balls:
+        local, order, bonds = bonds_module.topology(bonds, lambda k, w: len(walls[(k, w)][1]))
+        for k in order:
             members[k] = len(pars)
-            pars += [num(0)] * MEMBER_PARS
+            member_pars.append(len(pars))
+            base = BALL_PARS * k
+            pars += [num(0)] * 3 + [pars[base + MU_G], pars[base + MU_G_U], pars[base + SPIN]]
+            pars += [num(1) if m == k else num(0) for m in range(n)]
         for bond in bonds:
+            slot_pars.append(len(pars))
             if bond[0] == "pair":
                 with workprec():  # (R_i + R_j)^2 at the model's precision (at mpmath's global 53 bits a quad run
                     reach = scene.balls[bond[1]].body.radius + scene.balls[bond[2]].body.radius  # held a pair
                     reach2 = reach * reach  # 8e-19 too far: overlap)
-                reaches[bond] = len(pars)
                 pars.append(num(reach2))
+            else:
+                pars += list(walls[(bond[1], bond[2])][1])
         events += [TableEvent("release" if bond[0] == "pair" else "bond_lift", bond[1], bond[2]) for bond in bonds]
-        events += [TableEvent("pair_roll", k) for k in balls] + [TableEvent("pair_grip", k) for k in balls]
-    shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown, ride, grips, tuple(bonds))
+        events += [TableEvent("pair_roll", k) for k in order] + [TableEvent("pair_grip", k) for k in order]
+    shape = (scene.boundary.kind, n, tuple(lengths), rolls, cooldown, ride, grips, local)
     return TableSystem(events=tuple(events), walls=walls, pairs=pairs, pars=tuple(pars), rolls=rolls, shape=shape,
                        cooldown=cooldown, max_step=crossing, ride=ride, alpha=alpha, slip_end=slip_end, grips=grips,
                        ride_flags=ride_flags, bonds=tuple(bonds), bond_pars=bond_pars, members=members,
-                       reaches=reaches)
+                       topology=local, member_pars=tuple(member_pars), slot_pars=tuple(slot_pars),
+                       first_bond_event=first_bond_event)
 
 
 def _crossing_time(scene: TableScene) -> float:
@@ -356,15 +368,14 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
     equations = []
     cushion = {}  # ball -> its cushion terms (riding systems)
     press = _bond_terms(scene, system, var) if system.bonds else None
-    contact = press.added if press is not None else {}  # member of a cluster -> the accelerations of v and u
-    held = {(bond[1], bond[2]) for bond in system.bonds if bond[0] == "wall"}  # its cluster holds it there
+    contact = press.added if press is not None else {}  # ball -> the accelerations of v and u its bonds add
     for k in range(n):
         x, y, vx, vy, ux, uy = var[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
         base = BALL_PARS * k
         ax, ay = par[base + FVX], par[base + FVY]
         bx, by = par[base + FUX], par[base + FUY]
         if system.ride:
-            terms = cushion[k] = _cushion_terms(scene, system, k, (x, y, vx, vy, ux, uy), held)
+            terms = cushion[k] = _cushion_terms(scene, system, k, (x, y, vx, vy, ux, uy))
             ax, ay = ax + terms.ax, ay + terms.ay
             bx, by = bx + terms.bx, by + terms.by
         if k in contact:
@@ -379,7 +390,7 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
     # the function's slope falls and hid the next impact of a ball grazing the cushion (measured).
     typed["cooldown"] = state[0] - state[0] + system.cooldown
     events = []
-    for ev in system.events:
+    for ev in system.events[:system.first_bond_event]:
         k = ev.ball
         x, y = var[STATE_PER_BALL * k], var[STATE_PER_BALL * k + 1]
         if ev.kind == "wall":
@@ -412,16 +423,17 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
             spin, mu_g = par[base + SPIN], par[base + MU_G]
             excess = spin * spin * terms.curvature * terms.curvature - mu_g * mu_g * terms.gradient2
             events.append(hy.t_event(armed * excess - (1. - armed), direction=positive, **typed))
-        elif ev.kind in ("release", "bond_lift"):  # a bond's multiplier (without Baumgarte's terms) through 0
-            events.append(hy.t_event(press.holds[system.bonds.index(_bond_of(ev))], direction=negative, **typed))
-        elif ev.kind == "pair_roll":  # a sliding member's slip falls to the slip end: it rolls
-            sliding = par[system.members[k] + M_SLIDING]
-            events.append(hy.t_event(sliding * (press.slips[k] - par[system.bond_pars + B_SLIP_END]) + (1. - sliding),
+    if press is not None:  # by position: the compiled system serves every set of bonds of its shape
+        # a bond's multiplier (without Baumgarte's terms) through 0: it lets go
+        events += [hy.t_event(hold, direction=negative, **typed) for hold in press.holds]
+        for first, slip in zip(system.member_pars, press.slips):  # a sliding member's slip falls to the slip end
+            sliding = par[first + M_SLIDING]
+            events.append(hy.t_event(sliding * (slip - par[system.bond_pars + B_SLIP_END]) + (1. - sliding),
                                      direction=negative, **typed))
-        else:  # pair_grip: a rolling member needs more of the cloth's friction than mu m g: (kappa - 1) |a| > mu g
-            base = BALL_PARS * k
-            armed = par[system.members[k] + M_GRIP]
-            excess = par[base + SPIN] * par[base + SPIN] * press.grips[k] - par[base + MU_G] * par[base + MU_G]
+        for first, need in zip(system.member_pars, press.grips):
+            # a rolling member needs more of the cloth's friction than mu m g: (kappa - 1) |a| > mu g
+            armed = par[first + M_GRIP]
+            excess = par[first + M_SPIN] * par[first + M_SPIN] * need - par[first + M_MU_G] * par[first + M_MU_G]
             events.append(hy.t_event(armed * excess - (1. - armed), direction=positive, **typed))
     # finite balls in an ellipse: one degree-8 gap polynomial per ball; from 3 balls on compact mode compiles in
     # 0.4 s where the default took 1.3 s (3 balls), 3.4 s (5), 46 s (7), at the same speed after (measured)
@@ -430,6 +442,10 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
         len(system.bonds) > 2
     if big and "compact_mode" not in options:
         options = dict(options, compact_mode=True)
+    if system.bonds and "opt_level" not in options:
+        # a run compiles one system per set of bonds it meets (32 in a random 14-ball scene): LLVM's optimisation
+        # took 0.4-1 s of each (16 balls), opt_level 0 takes 0.1 s; measured runtime cost in _BOND_OPT_NOTE
+        options = dict(options, opt_level=0)
     return hy.taylor_adaptive(equations, list(state), pars=list(system.pars), t_events=events, **options)
 
 
@@ -448,11 +464,11 @@ class _CushionTerms:
     gradient2: object
 
 
-def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables, held=()) -> _CushionTerms:
+def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables) -> _CushionTerms:
     """The cushion's constraint acceleration -r lambda grad g on ball k and, while it skids, the cloth's
     friction along the turning slip (module docstring), summed over its walls, each with its flag r (one is
-    1 while the ball rides it); not over the walls ``held`` by a cluster of bonds (their force is the cluster's:
-    _bond_terms).
+    1 while the ball rides it); none while a cluster of bonds holds the ball on its cushion (flag HELD: the
+    force is the cluster's, _bond_terms).
 
     Where the ball does not ride a wall (r = 0) the denominator is |grad g|^2 + 1, never 0 (grad g vanishes at
     the centre of an ellipse), and the term is multiplied by 0; a ball that does not skid (flag 0) has the
@@ -464,15 +480,15 @@ def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables, he
     slip = hy.sqrt(ux * ux + uy * uy + (1. - skid) + TINY)
     fx, fy = -skid * par[base + MU_G] * ux / slip, -skid * par[base + MU_G] * uy / slip
     cx = cy = pressing = curvature = gradient2 = 0.
+    own = 1. - par[base + HELD]
     for w in range(scene.boundary.n_walls()):
-        if (k, w) in held:
-            continue
-        g, gx, gy, gxx, gxy, gyy = _gap_derivatives(scene, system, k, w, x, y)
+        first, values = system.walls[(k, w)]
+        g, gx, gy, gxx, gxy, gyy = _gap_derivatives(scene, [par[first + m] for m in range(len(values))], x, y)
         riding = par[system.ride_flags[(k, w)]]
         bend = vx * vx * gxx + 2. * vx * vy * gxy + vy * vy * gyy
         press = bend + gx * fx + gy * fy
         g2 = gx * gx + gy * gy
-        lam = riding * (press + 2. * alpha * (gx * vx + gy * vy) + alpha * alpha * g) / (g2 + (1. - riding))
+        lam = own * riding * (press + 2. * alpha * (gx * vx + gy * vy) + alpha * alpha * g) / (g2 + (1. - riding))
         cx, cy = cx - lam * gx, cy - lam * gy
         pressing, curvature, gradient2 = pressing + riding * press, curvature + riding * bend, gradient2 + riding * g2
     hold = par[base + RIDE_HOLD] * (par[base + RIDE_SPEED2] - vx * vx - vy * vy)  # 0 unless rolling on it
@@ -482,27 +498,26 @@ def _cushion_terms(scene: TableScene, system: TableSystem, k: int, variables, he
                          gradient2=gradient2)
 
 
-def _gap_derivatives(scene: TableScene, system: TableSystem, k: int, w: int, x, y) -> tuple:
-    """Ball k's gap g to wall w (heyoka expressions of its centre x, y), its gradient and Hessian."""
-    first, values = system.walls[(k, w)]
-    g = scene.boundary.gap(w, x, y, [hy.par[first + m] for m in range(len(values))])
-    gx, gy = hy.diff(g, x), hy.diff(g, y)
-    return g, gx, gy, hy.diff(gx, x), hy.diff(gx, y), hy.diff(gy, y)
-
-
-def _bond_of(event: TableEvent) -> tuple:
-    return ("pair" if event.kind == "release" else "wall", event.ball, event.other)
+def _gap_derivatives(scene: TableScene, c: list, x, y) -> tuple:
+    """The gap g of a ball at (x, y) (heyoka expressions) to a wall with constants ``c`` (parameters; every wall
+    of a boundary has the same form), its gradient and Hessian."""
+    u, v = hy.make_vars("gap_x", "gap_y")  # derivatives by variables, then the position put in (a member's is a sum)
+    g = scene.boundary.gap(0, u, v, c)
+    gx, gy = hy.diff(g, u), hy.diff(g, v)
+    terms = [g, gx, gy, hy.diff(gx, u), hy.diff(gx, v), hy.diff(gy, v)]
+    return tuple(hy.subs(t, {"gap_x": x, "gap_y": y}) for t in terms)
 
 
 @dataclass(frozen=True)
 class _BondTerms:
-    """The terms of a run's bonds (heyoka expressions): per member ball the added (v', u') as (ax, ay, bx, by),
-    its slip's size and |a|^2 of the part of its contact acceleration that the cloth's friction must make
-    (pair_grip); per bond (``TableSystem.bonds`` order) its multiplier without Baumgarte's terms (release)."""
+    """The terms of a run's bonds (heyoka expressions): per ball the added (v', u') as (ax, ay, bx, by) (zero
+    but for members); per member (the shape's order) its slip's size and |a|^2 of the part of its contact
+    acceleration that the cloth's friction must make (pair_grip); per bond its multiplier without Baumgarte's
+    terms (release)."""
 
     added: dict
-    slips: dict
-    grips: dict
+    slips: list
+    grips: list
     holds: list
 
 
@@ -513,42 +528,50 @@ def _bond_terms(scene: TableScene, system: TableSystem, var) -> _BondTerms:
     slip (the contact forces go through the centre: they change v and u alike, not the spin); a rolling member
     has none and mobility w = 1/(kappa m). No ball-ball or ball-cushion friction. The forces do no work
     (J v = 0 on the bonds). One pair bond alone: lambda = -(|dv|^2 + dc . (f_j - f_i) + 2 alpha dc . dv +
-    alpha^2 C / 2) / ((w_i + w_j) |dc|^2)."""
+    alpha^2 C / 2) / ((w_i + w_j) |dc|^2).
+
+    Compiled for the bonds' shape (``system.topology``), not for their balls: each member's state is its
+    ball's, picked by its selection parameters (sum_k s_k x_k, exact: ones and zeros), and its accelerations
+    go back to its ball the same way."""
     par = hy.par
+    n = system.n_balls
     alpha = par[system.bond_pars + B_ALPHA]
-    mobility, free, free_u, sliding, slips = {}, {}, {}, {}, {}
-    for k, first in system.members.items():
-        x, y, vx, vy, ux, uy = var[STATE_PER_BALL * k:STATE_PER_BALL * (k + 1)]
-        s = sliding[k] = par[first + M_SLIDING]
-        slip = slips[k] = hy.sqrt(ux * ux + uy * uy + (1. - s) + TINY)
-        base = BALL_PARS * k
-        free[k] = (-s * par[base + MU_G] * ux / slip, -s * par[base + MU_G] * uy / slip)
-        free_u[k] = (-s * par[base + MU_G_U] * ux / slip, -s * par[base + MU_G_U] * uy / slip)
-        mobility[k] = par[first + M_MOBILITY]
+    mobility, free, free_u, sliding, slips, state = {}, {}, {}, {}, [], {}
+    for m, first in enumerate(system.member_pars):
+        pick = [par[first + MEMBER_PARS + k] for k in range(n)]
+        x, y, vx, vy, ux, uy = state[m] = [hy.sum([pick[k] * var[STATE_PER_BALL * k + c] for k in range(n)])
+                                           for c in range(STATE_PER_BALL)]
+        s = sliding[m] = par[first + M_SLIDING]
+        slip = hy.sqrt(ux * ux + uy * uy + (1. - s) + TINY)
+        slips.append(slip)
+        mu_g, mu_g_u = par[first + M_MU_G], par[first + M_MU_G_U]
+        free[m] = (-s * mu_g * ux / slip, -s * mu_g * uy / slip)
+        free_u[m] = (-s * mu_g_u * ux / slip, -s * mu_g_u * uy / slip)
+        mobility[m] = par[first + M_MOBILITY]
     directions, targets, plain = [], [], []
-    for bond in system.bonds:
+    for bond, first in zip(system.topology, system.slot_pars):
         if bond[0] == "pair":
             _, i, j = bond
-            xi, yi, vxi, vyi = var[STATE_PER_BALL * i:STATE_PER_BALL * i + 4]
-            xj, yj, vxj, vyj = var[STATE_PER_BALL * j:STATE_PER_BALL * j + 4]
+            xi, yi, vxi, vyi = state[i][:4]
+            xj, yj, vxj, vyj = state[j][:4]
             dx, dy, dvx, dvy = xj - xi, yj - yi, vxj - vxi, vyj - vyi
             directions.append({i: (-dx, -dy), j: (dx, dy)})
             quad = dvx * dvx + dvy * dvy
             plain.append(-quad)
             targets.append(-(quad + 2. * alpha * (dx * dvx + dy * dvy) +
-                             alpha * alpha * (dx * dx + dy * dy - par[system.reaches[bond]]) / 2.))
+                             alpha * alpha * (dx * dx + dy * dy - par[first]) / 2.))
         else:
-            _, k, w = bond
-            x, y, vx, vy = var[STATE_PER_BALL * k:STATE_PER_BALL * k + 4]
-            g, gx, gy, gxx, gxy, gyy = _gap_derivatives(scene, system, k, w, x, y)
-            directions.append({k: (-gx, -gy)})
+            _, m, size = bond
+            x, y, vx, vy = state[m][:4]
+            g, gx, gy, gxx, gxy, gyy = _gap_derivatives(scene, [par[first + c] for c in range(size)], x, y)
+            directions.append({m: (-gx, -gy)})
             bend = vx * vx * gxx + 2. * vx * vy * gxy + vy * vy * gyy
             plain.append(bend)
             targets.append(bend + 2. * alpha * (gx * vx + gy * vy) + alpha * alpha * g)
     work = bonds_module.free_work(directions, free)
-    added, grips, holds = {}, {}, [None] * len(system.bonds)
-    for group in bonds_module.clusters(system.bonds):
-        index = [system.bonds.index(b) for b in group]
+    members, grips, holds = {}, [None] * len(system.member_pars), [None] * len(system.topology)
+    for group in bonds_module.clusters(system.topology):
+        index = [e for e, b in enumerate(system.topology) if b in group]  # (a pinned ball's two walls: one form)
         ds = [directions[e] for e in index]
         matrix = bonds_module.bond_matrix(ds, mobility)
         lam, lam0 = bonds_module.solve(matrix, [[targets[e] - work[e] for e in index],
@@ -557,12 +580,17 @@ def _bond_terms(scene: TableScene, system: TableSystem, var) -> _BondTerms:
             holds[e] = value
         contact = bonds_module.pushes(ds, mobility, lam)
         # the cushion's part needs no friction where its model keeps a ball rolling (paper section 7.2)
-        gripped = [(d, m) for d, m, b in zip(ds, lam, group) if b[0] == "pair" or not scene.cushion.keeps_rolling]
-        needs = bonds_module.pushes([d for d, _ in gripped], mobility, [m for _, m in gripped])
-        for k, (ax, ay) in contact.items():
-            fx, fy = free[k]
-            fux, fuy = free_u[k]
-            added[k] = (fx + ax, fy + ay, fux + sliding[k] * ax, fuy + sliding[k] * ay)
-            nx, ny = needs.get(k, (0., 0.))
-            grips[k] = nx * nx + ny * ny
+        gripped = [(d, v) for d, v, e in zip(ds, lam, index)
+                   if system.topology[e][0] == "pair" or not scene.cushion.keeps_rolling]
+        needs = bonds_module.pushes([d for d, _ in gripped], mobility, [v for _, v in gripped])
+        for m, (ax, ay) in contact.items():
+            fx, fy = free[m]
+            fux, fuy = free_u[m]
+            members[m] = (fx + ax, fy + ay, fux + sliding[m] * ax, fuy + sliding[m] * ay)
+            nx, ny = needs.get(m, (0., 0.))
+            grips[m] = nx * nx + ny * ny
+    added = {}
+    for k in range(n):  # each member's accelerations back to its ball
+        picks = [(par[first + MEMBER_PARS + k], members[m]) for m, first in enumerate(system.member_pars)]
+        added[k] = tuple(hy.sum([p * terms[c] for p, terms in picks]) for c in range(4))
     return _BondTerms(added=added, slips=slips, grips=grips, holds=holds)
