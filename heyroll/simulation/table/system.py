@@ -443,8 +443,9 @@ def _compile(scene: TableScene, system: TableSystem, options: dict, state):
     if big and "compact_mode" not in options:
         options = dict(options, compact_mode=True)
     if system.bonds and "opt_level" not in options:
-        # a run compiles one system per set of bonds it meets (32 in a random 14-ball scene): LLVM's optimisation
-        # took 0.4-1 s of each (16 balls), opt_level 0 takes 0.1 s; measured runtime cost in _BOND_OPT_NOTE
+        # a run compiles one system per shape of bonds it meets (22 in a random 16-ball break): LLVM's optimisation
+        # took 0.4-1 s of each, opt_level 0 takes 0.1-0.2 s, and the steps run slower (measured on that break,
+        # compiled systems cached: 4.8 s instead of 2.1 s; in all 8 s instead of ~15 s)
         options = dict(options, opt_level=0)
     return hy.taylor_adaptive(equations, list(state), pars=list(system.pars), t_events=events, **options)
 
