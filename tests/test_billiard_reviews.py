@@ -249,3 +249,20 @@ def test_a_slow_skid_out_of_a_corner_ends_its_slip(spin):
     ux0 = -0.1 * float(spin)
     assert float(result.state_final[2]) == pytest.approx(-(0.4 / 1.4) * ux0, rel=1e-10)
     assert list(result.state_final[3:6]) == [0.0, 0.0, 0.0] and result.energy_final < result.energy_initial
+
+
+@pytest.mark.parametrize("gap", ["0.0", "1e-13"])
+def test_a_sequential_collapse_down_a_touching_row_goes_to_its_limit(gap):
+    """k = 0, sequential policy: a ball into four touching at rest. Each plastic impact leaves the next pair
+    approaching, more slowly, for ever (a cradle of five passed 10,000 impacts at one instant: failed). After
+    SEQUENTIAL_COLLAPSE impacts the touching contacts are resolved together: the sequence's limit, all five at
+    v/5, energy 1/5 (momentum kept)."""
+    from heyroll.simulation.table.driver import SEQUENTIAL_COLLAPSE
+
+    balls = [ball("-0.3", "0", "1.0", "0")] + [ball(repr(n * (0.2 + float(gap))), "0", "0", "0") for n in range(4)]
+    result = simulate(table_scene('boundary = "rectangle"\nwidth = 4.0\nheight = 2.0', balls, law="newton", k="0",
+                                  friction="0", t_end=0.5))
+    assert result.status is Status.COMPLETED, result.message
+    assert SEQUENTIAL_COLLAPSE < result.n_collisions < SEQUENTIAL_COLLAPSE + 20
+    assert [float(v) for v in result.state_final[2::6]] == pytest.approx([0.2] * 5, rel=1e-14)
+    assert result.energy_final == pytest.approx(result.energy_initial / 5, rel=1e-14)

@@ -925,10 +925,9 @@ def rack_scene(rng, index: int) -> tuple:
         d = 2 * radius + gap
         for row in range(5):
             for j in range(row + 1):
-                x, y = 0.635 + row * d * math.sqrt(3) / 2, (j - row / 2) * d
-                # (pushed a hair outward: sqrt(3)'s rounding made neighbours overlap by 1e-17)
-                balls.append(body(repr(x * (1 + 1e-15)), repr(y * (1 + 1e-15)), "0", "0", radius=repr(radius),
-                                  mass="0.17"))
+                # (spread by 1e-14 about the apex: sqrt(3)'s rounding made neighbours overlap by 1e-17)
+                x, y = 0.635 + row * d * math.sqrt(3) / 2 * (1 + 1e-14), (j - row / 2) * d * (1 + 1e-14)
+                balls.append(body(repr(x), repr(y), "0", "0", radius=repr(radius), mass="0.17"))
         speed, what = rng.uniform(3, 8), "break"
         cue = dict(body("-0.635", repr(rng.choice([0.0, 0.005])), repr(speed), "0", radius=repr(radius),
                         mass="0.17"), wx=0.0, wy=spin)

@@ -37,6 +37,9 @@ NEAR_ROOT = 2.0**-24
 STEP_CHUNK = 100_000
 #: Impacts at one instant before the run is declared stuck (an inelastic collapse).
 MAX_AT_ONE_INSTANT = 10_000
+#: Impacts at one instant under the sequential policy after which the touching contacts are resolved together
+#: (the collapse's limit: _Run.at_instant).
+SEQUENTIAL_COLLAPSE = 1000
 #: Doublings of leave()'s step at most (from an ulp of the table's size).
 LEAVE_DOUBLINGS = 20
 #: Pieces of motion kept for figures.
@@ -891,7 +894,7 @@ class _Run:
         cleanup = False  # 'impulses' after its simultaneous resolution: what it left, one by one
         rider_hits: dict = {}  # a pair with a riding ball resolved at this instant, how often
         collapsed = None  # such a pair resolved more than RIDER_PAIR_REPEATS times
-        for _ in range(MAX_AT_ONE_INSTANT):
+        for round_ in range(MAX_AT_ONE_INSTANT):
             if self.status is not None:
                 if not impulses:
                     return
@@ -937,6 +940,12 @@ class _Run:
                         collapsed = contact
                         break
                 group = self._together(contact, near, cleanup)
+                if round_ >= SEQUENTIAL_COLLAPSE and not self.one_by_one:
+                    # a sequential collapse (k = 0 down a touching row: each impact leaves the next pair approaching,
+                    # more slowly, for ever; a cradle of five went past 10,000 impacts): its limit, the touching
+                    # contacts resolved together (the 'impulses' solution: at k = 0 on a row, every ball at the
+                    # row's common speed, as the sequence's limit)
+                    group = [c for c in near if not self.rides(c) or self.closing(c)]
                 if len(group) > 1:
                     self.simultaneous(group)
                 else:
