@@ -156,6 +156,32 @@ def solve(matrix: list, right_sides: list) -> list:
     return solutions
 
 
+def complementary(matrix: list, right: list) -> list:
+    """The lambda >= 0 with w = A lambda - b >= 0 and lambda_e w_e = 0 for every bond (floats; A symmetric positive
+    definite: one solution), by Murty's principal pivoting (the least index that breaks a condition changes side;
+    finite for such A). Bonds with lambda 0 let go (their contacts open or stay closed without force). Without
+    convergence in 64 m pivots (round-off cycling) the bonds whose equality solution pulls get 0."""
+    m = len(right)
+    active = list(range(m))
+    for _ in range(64 * m + 1):
+        lam = [0.0] * m
+        if active:
+            sub = [[matrix[i][j] for j in active] for i in active]
+            for e, value in zip(active, solve(sub, [[right[i] for i in active]])[0]):
+                lam[e] = value
+        wrong = None
+        for e in range(m):
+            opening = sum(matrix[e][f] * lam[f] for f in range(m) if matrix[e][f] is not None) - right[e]
+            if (e in active and lam[e] < 0) or (e not in active and opening < 0):
+                wrong = e
+                break
+        if wrong is None:
+            return lam
+        active = sorted(set(active) ^ {wrong})
+    lam = solve(matrix, [right])[0]
+    return [value if value > 0 else 0.0 for value in lam]
+
+
 def pushes(directions: list, mobility: dict, multipliers: list) -> dict:
     """Per ball, the acceleration its bonds give it, w_k sum_e lambda_e n_ek, as (ax, ay)."""
     out: dict = {}
