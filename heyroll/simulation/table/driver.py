@@ -442,8 +442,7 @@ class _Run:
         for bond in group:
             if bond[0] == "pair":
                 _, i, j = bond
-                si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
-                dx, dy = (value(self.state[sj + m] - self.state[si + m]) for m in (0, 1))
+                dx, dy = self._difference(i, j, 0, value)
                 directions.append({i: (-dx, -dy), j: (dx, dy)})
             else:
                 _, k, w = bond
@@ -451,6 +450,11 @@ class _Run:
                 directions.append({k: (-value(gx), -value(gy))})
         mobility = {k: value(self._mobility(k)) for bond in group for k in bond_balls(bond)}
         return directions, mobility
+
+    def _difference(self, i: int, j: int, m: int, value=lambda v: v) -> tuple:
+        """State entries m, m + 1 of ball j minus ball i (m = 0: dc, 2: dv), through ``value``."""
+        si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
+        return value(self.state[sj + m] - self.state[si + m]), value(self.state[sj + m + 1] - self.state[si + m + 1])
 
     def project_cluster(self, k: int) -> None:
         """Put ball k's cluster onto its bonds' contacts (C = 0), the centres moved along the bonds' directions
@@ -464,8 +468,7 @@ class _Run:
             for bond in group:
                 if bond[0] == "pair":
                     _, i, j = bond
-                    si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
-                    dx, dy = self.state[sj] - self.state[si], self.state[sj + 1] - self.state[si + 1]
+                    dx, dy = self._difference(i, j, 0)
                     _, reach = self.system.pairs[(i, j)]
                     errors.append(-(dx * dx + dy * dy - reach * reach) / 2)
                 else:
@@ -512,9 +515,7 @@ class _Run:
         plain = []
         for bond in group:
             if bond[0] == "pair":
-                _, i, j = bond
-                si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
-                dvx, dvy = (float(self.state[sj + m] - self.state[si + m]) for m in (2, 3))
+                dvx, dvy = self._difference(bond[1], bond[2], 2, float)
                 plain.append(-(dvx * dvx + dvy * dvy))
             else:
                 plain.append(self._gap_terms(bond[1], wall=bond[2])[2])
