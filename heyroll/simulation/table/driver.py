@@ -907,16 +907,7 @@ class _Run:
             if self.system.ride:
                 self.settle_riders(near)
             if impulses and not cleanup:
-                # A riding ball's cushion takes part where the ball is driven into it or hit by a ball (the
-                # ball presses on it as the impact happens; resolving the pair first and the cushion in a
-                # second solution put impulses on a separating pair and made energy: review).
-                hit = {b for c in near if c.kind == "pair" and self.closing(c) for b in (c.i, c.j)}
-                if first is not None and first.kind == "pair":
-                    hit.update((first.i, first.j))
-                touching = [c for c in near
-                            if not self.rides(c) or c.i in hit or self.closing(c)]
-                if first is not None and not any(_same(first, c) for c in touching):
-                    touching.append(first)
+                touching = self._simultaneous_group(near, first)
                 approaching = [c for c in touching if self.closing(c)]
                 if not approaching:
                     break
@@ -944,12 +935,14 @@ class _Run:
                         collapsed = contact
                         break
                 group = self._together(contact, near, cleanup)
-                if round_ >= SEQUENTIAL_COLLAPSE and not self.one_by_one:
+                wedged = rider_hits.get((contact.i, contact.j), 0) > RIDER_PAIR_REPEATS // 2
+                if (round_ >= SEQUENTIAL_COLLAPSE or wedged) and not self.one_by_one:
                     # a sequential collapse (k = 0 down a touching row: each impact leaves the next pair approaching,
-                    # more slowly, for ever; a cradle of five went past 10,000 impacts): its limit, the touching
-                    # contacts resolved together (the 'impulses' solution: at k = 0 on a row, every ball at the
-                    # row's common speed, as the sequence's limit)
-                    group = [c for c in near if not self.rides(c) or self.closing(c)]
+                    # more slowly, for ever; a cradle of five went past 10,000 impacts; a ball wedged between two
+                    # riders, bouncing from one to the other, 10 % slower each time: the run stopped): its limit,
+                    # the touching contacts resolved together (the 'impulses' solution: at k = 0 on a row, every
+                    # ball at the row's common speed, as the sequence's limit)
+                    group = self._simultaneous_group(near)
                 if len(group) > 1:
                     self.simultaneous(group)
                 else:
@@ -1002,6 +995,19 @@ class _Run:
             if self.fired is None or fresh or not _same(c, self.fired) or \
                     not -self.geometry.approach(c, self.state) > self.round_off * self._speed_scale(c):
                 self.leave(c)
+
+    def _simultaneous_group(self, near: list, first: Contact | None = None) -> list:
+        """The touching contacts of one simultaneous solution (``first``: the contact heyoka found). A riding
+        ball's cushion takes part where the ball is driven into it or hit by a ball (the ball presses on it as the
+        impact happens; resolving the pair first and the cushion in a second solution put impulses on a separating
+        pair and made energy: review)."""
+        hit = {b for c in near if c.kind == "pair" and self.closing(c) for b in (c.i, c.j)}
+        if first is not None and first.kind == "pair":
+            hit.update((first.i, first.j))
+        touching = [c for c in near if not self.rides(c) or c.i in hit or self.closing(c)]
+        if first is not None and not any(_same(first, c) for c in touching):
+            touching.append(first)
+        return touching
 
     def _together(self, contact: Contact, near: list, cleanup: bool) -> list:
         """The touching contacts resolved with ``contact`` in one solution, one by one otherwise:
