@@ -247,7 +247,7 @@ def test_a_slow_skid_out_of_a_corner_ends_its_slip(spin):
                                   cushion_k="0", friction="0.2", t_end=2.0))
     assert result.status is Status.COMPLETED, result.message
     ux0 = -0.1 * float(spin)
-    assert float(result.state_final[2]) == pytest.approx(-(0.4 / 1.4) * ux0, rel=1e-10)
+    assert float(result.state_final[2]) == pytest.approx(-(0.4 / 1.4) * ux0, rel=1e-10, abs=0)
     assert list(result.state_final[3:6]) == [0.0, 0.0, 0.0] and result.energy_final < result.energy_initial
 
 
@@ -264,5 +264,55 @@ def test_a_sequential_collapse_down_a_touching_row_goes_to_its_limit(gap):
                                   friction="0", t_end=0.5))
     assert result.status is Status.COMPLETED, result.message
     assert SEQUENTIAL_COLLAPSE < result.n_collisions < SEQUENTIAL_COLLAPSE + 20
-    assert [float(v) for v in result.state_final[2::6]] == pytest.approx([0.2] * 5, rel=1e-14)
-    assert result.energy_final == pytest.approx(result.energy_initial / 5, rel=1e-14)
+    assert [float(v) for v in result.state_final[2::6]] == pytest.approx([0.2] * 5, rel=1e-14, abs=0)
+    assert result.energy_final == pytest.approx(result.energy_initial / 5, rel=1e-14, abs=0)
+
+
+BOND_REVIEWS = Path(__file__).parent / "data" / "bond_reviews"
+
+
+def bond_review(name: str):
+    from heyroll.interfaces.scene_file import load_scene
+
+    return simulate(load_scene(BOND_REVIEWS / f"{name}.toml"))
+
+
+def test_a_column_pushed_into_the_cushion_gets_its_cushion_bond():
+    """A stun shot into two balls resting in a column on the cushion (k = 0, impulses): the three were pressed
+    together and pushed into the cushion, but a rolling member at rest was never judged pressed on it (its slip,
+    0, 'ends first'): a tiny bounce released the bonds, friction pressed them again, 70,524 rows for 0.18 s of table
+    time (review). A member's push lasts while its bonds hold: it bonds to the cushion and the column comes to rest."""
+    result = bond_review("column_hang")
+    assert result.status is Status.COMPLETED and result.n_collisions < 50, result.message
+    assert result.energy_final < 1e-20 * result.energy_initial
+
+
+def test_a_corner_settle_of_a_sliding_ball_makes_no_energy():
+    """settle_corners set a ball riding with its normal speed (up to sqrt(2 |f| overlap), not round-off) removed
+    unrecorded, the spin taking it: +2.2e-9 J between two rows (review). Now a row, the slip taking it."""
+    result = bond_review("corner_energy")
+    assert result.status is Status.COMPLETED, result.message
+    table = result.collision_table()
+    assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
+    assert np.all(table["energy_before"][1:] <= table["energy_after"][:-1] * (1 + 1e-14))
+
+
+@pytest.mark.parametrize("name", ["corner_overlap", "rider_collapse"])
+def test_a_pressed_ball_in_a_corner_stays_pinned(name):
+    """A pair pushed into a triangle's corner: pin() was undone at once (a slip of round-off ended, unpinning the
+    ball), ride, press, pin ... at one instant until the loop's end, and the ball passed through a wall (overlap);
+    three balls collapsing against a rider stopped with 'a cushion turns a riding ball into the other' (review).
+    Now the ball stays pinned, rolling, its walls bonds of the cluster; both runs complete, no energy made."""
+    result = bond_review(name)
+    assert result.status is Status.COMPLETED, result.message
+    table = result.collision_table()
+    assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
+
+
+def test_a_rack_in_a_sixty_degree_corner_with_dependent_contacts_says_so():
+    """Three balls racked into a 60 degree corner and struck: seven contacts on six degrees of freedom, the bonds'
+    forces undetermined (the elimination divided by round-off: overlaps, hangs; review). The run now stops with
+    status failed naming the cause."""
+    result = bond_review("rack60_dependent")
+    assert result.status is Status.FAILED
+    assert "would not be independent" in result.message and "stay pressed together" in result.message

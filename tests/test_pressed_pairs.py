@@ -54,7 +54,7 @@ def test_a_follow_shot_at_k0_is_pressed_together_and_rolls_on_as_the_closed_form
     t1, t2, t3, x1, x2, v = follow_shot_closed_form(1.5)
     # the impact (Newton's law through the centres: ball 1 slides, flag 3), then the pair pressed together
     assert list(table["law_flag"]) == [3, SETTLED] and list(table["j"]) == [2, 2]
-    assert table["t"][0] == pytest.approx(t1, rel=1e-15)
+    assert table["t"][0] == pytest.approx(t1, rel=1e-15, abs=0)
     assert table["energy_after"][1] == pytest.approx(table["energy_before"][1], rel=1e-14)  # nothing left to take
     state = result.state_final
     assert state[0] == pytest.approx(x1, rel=1e-12) and state[6] == pytest.approx(x2, rel=1e-12)
@@ -100,7 +100,8 @@ def test_a_follow_shot_into_a_touching_pair_is_pressed_as_a_chain_as_the_closed_
     assert result.status is Status.COMPLETED, result.message
     table = result.collision_table()
     t1, t2, t3, x1, x2, x3, v = chain_closed_form(2.0)
-    assert table["t"][0] == pytest.approx(t1, rel=1e-15)
+    # (3.5e-13: the start opened the touching pair by 2.3e-13 m, leave(); quad meets the closed form to 1e-17)
+    assert table["t"][0] == pytest.approx(t1, rel=1e-12, abs=0)
     assert list(table["law_flag"]).count(SETTLED) == 2 and np.all(table["t"][1:] == table["t"][0])
     assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
     state = result.state_final
@@ -121,7 +122,7 @@ def test_the_pressed_pair_lets_go_where_friction_no_longer_drives_it():
         assert list(table["law_flag"]).count(SETTLED) == 1 and list(table["law_flag"]).index(SETTLED) == 9
         assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
         state = result.state_final
-        assert state[2] == pytest.approx(state[8], rel=1e-15) and list(state[4:6]) == list(state[10:12]) == [0.0, 0.0]
+        assert state[2] == pytest.approx(state[8], rel=1e-15, abs=0) and list(state[4:6]) == list(state[10:12]) == [0.0, 0.0]
 
 
 def test_an_oblique_pressed_pair_follows_the_reference_and_holds_its_contact():
@@ -269,7 +270,8 @@ def test_a_ball_pressed_onto_one_resting_at_the_cushion_holds_both_bonds_until_i
     result = simulate(scene)
     assert result.status is Status.COMPLETED, result.message
     table = result.collision_table()
-    assert table["t"][0] == pytest.approx(t1, rel=1e-15) and np.all(table["t"] == table["t"][0])
+    # (9.9e-13: the start opened ball 2's cushion contact by 2.3e-13 m, leave())
+    assert table["t"][0] == pytest.approx(t1, rel=2e-12, abs=0) and np.all(table["t"] == table["t"][0])
     settled = table["law_flag"] == SETTLED
     assert set(table["j"][settled]) == {0, 2}  # a row on the cushion (j = 0) and one on the pair
     state = result.state_final

@@ -156,6 +156,22 @@ def solve(matrix: list, right_sides: list) -> list:
     return solutions
 
 
+def independent(matrix: list, tolerance: float = 2.0**-30) -> bool:
+    """The bonds' directions are independent: every pivot of the elimination of A = J W J^T (floats) above
+    ``tolerance`` times its diagonal entry. Dependent bonds (three balls racked into a 60 degree corner: seven
+    contacts on six degrees of freedom) leave the forces undetermined and the elimination divides by round-off."""
+    m = len(matrix)
+    a = [[0.0 if v is None else float(v) for v in row] for row in matrix]
+    for p in range(m):
+        if not a[p][p] > tolerance * float(matrix[p][p]):
+            return False
+        for i in range(p + 1, m):
+            factor = a[i][p] / a[p][p]
+            for j in range(p + 1, m):
+                a[i][j] -= factor * a[p][j]
+    return True
+
+
 def complementary(matrix: list, right: list) -> list:
     """The lambda >= 0 with w = A lambda - b >= 0 and lambda_e w_e = 0 for every bond (floats; A symmetric positive
     definite: one solution), by Murty's principal pivoting (the least index that breaks a condition changes side;
