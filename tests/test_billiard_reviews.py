@@ -316,3 +316,13 @@ def test_a_rack_in_a_sixty_degree_corner_with_dependent_contacts_says_so():
     result = bond_review("rack60_dependent")
     assert result.status is Status.FAILED
     assert "would not be independent" in result.message and "stay pressed together" in result.message
+
+
+def test_max_collisions_overshot_by_an_instant_says_how_many_were_written():
+    """max_collisions = 1 on the cradle under 'impulses': the instant's three simultaneous rows are written whole,
+    and the message said 'stopped after max_collisions = 1 impacts' (acceptance test). It now gives the count."""
+    balls = [ball("-0.8", "0", "1.0", "0")] + [ball(repr(x), "0", "0", "0") for x in (0.0, 0.2, 0.4)]
+    result = simulate(table_scene('boundary = "rectangle"\nwidth = 4.0\nheight = 2.0', balls, k="1", friction="0",
+                                  simultaneous="impulses", t_end=5.0), max_collisions=1)
+    assert result.status is Status.MAX_COLLISIONS and result.n_collisions == len(result.collision_table()["t"])
+    assert result.n_collisions > 1 and f"({result.n_collisions} written" in result.message
