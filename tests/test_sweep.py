@@ -145,6 +145,19 @@ def test_an_unknown_key_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, 
     assert isinstance(caught.value, ValueError) and caught.value.field == key
 
 
+def test_a_table_key_of_another_boundary_is_refused(tmp_path, capsys):
+    """track.radius on an elliptical table was accepted and every point recorded as an invalid scene (acceptance
+    test): a field of another boundary is now an unknown key, one line, exit 2, nothing written."""
+    from pathlib import Path
+
+    scene = Path(__file__).parents[1] / "examples" / "elliptical_billiard.toml"
+    out = tmp_path / "out"
+    assert main(["sweep", str(scene), "--vary", "track.radius=0.5:1.5:3", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "track.radius: unknown sweep key" in err and "a, b," in err
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("args, says", [
     (["--vary", "g=1:2"], "expected START:STOP:N"),
     (["--vary", "g=1:2:0"], "N in START:STOP:N"),

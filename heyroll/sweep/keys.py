@@ -140,7 +140,13 @@ def _check_table(key: Key, data: dict, unknown, numeric) -> None:
             unknown(f"name a ball and a field, e.g. bodies[1].vx (the table has {len(bodies)} balls, from 1)")
         numeric(path[1][0], tf.TABLE_BODY_KEYS, f"bodies[{index}] on a table")
         return
-    tables = {"track": tf.TABLE_TRACK_KEYS, "collision": tf.TABLE_COLLISION_KEYS, "run": sf.RUN_KEYS}
+    # the track's fields of this scene's boundary only (track.radius on an ellipse was accepted and every point
+    # recorded as an invalid scene: acceptance test)
+    track = data.get("track") if isinstance(data.get("track"), dict) else {}
+    boundary = track.get("boundary")
+    own = set(tf.BOUNDARY_KEYS.get(boundary, ())) if isinstance(boundary, str) else set()
+    others = {k for keys in tf.BOUNDARY_KEYS.values() for k in keys} - own
+    tables = {"track": tf.TABLE_TRACK_KEYS - others, "collision": tf.TABLE_COLLISION_KEYS, "run": sf.RUN_KEYS}
     if index is not None or any(i is not None for _n, i in path[1:]):
         unknown(f"{head} is not an array")
     if len(path) == 1:
