@@ -211,6 +211,13 @@ def pushes(directions: list, mobility: dict, multipliers: list) -> dict:
     return out
 
 
+def correction(directions: list, mobility: dict, right: list) -> dict:
+    """Per ball, w_k sum_e mu_e n_ek with A mu = ``right``: the change of position (right: the bonds' errors) or
+    of velocity (right: their opening speeds, negated) that corrects every bond of a cluster at once."""
+    mu, = solve(bond_matrix(directions, mobility), [right])
+    return pushes(directions, mobility, mu)
+
+
 def free_work(directions: list, free: dict) -> list:
     """Per bond, J f = sum_k n_ek . f_k of the balls' own accelerations ``free`` ({ball: (fx, fy)})."""
     out = []

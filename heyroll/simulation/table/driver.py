@@ -245,8 +245,7 @@ class _Run:
         self.ta.state[:] = self.state
         self.ta.pars[:] = self.pars
         if len(self.paths) < MAX_PATH_PIECES:
-            self.paths.append((float(self.t), [float(v) for v in self.state], self._accelerations(),
-                               tuple(k for k, on in enumerate(self.riding) if on)))
+            self._path_piece(self.t)
 
     def _accelerations(self) -> list:
         members = {}  # a member of a cluster of bonds: its acceleration now, the figures' parabola of its curve
@@ -265,10 +264,14 @@ class _Run:
         if len(self.paths) < MAX_PATH_PIECES:
             kept = self.state
             self.state = ta.state.tolist() if self.precision.name == "double" else list(ta.state)
-            self.paths.append((float(ta.time), [float(v) for v in self.state], self._accelerations(),
-                               tuple(k for k, on in enumerate(self.riding) if on)))
+            self._path_piece(ta.time)
             self.state = kept
         return True
+
+    def _path_piece(self, t) -> None:
+        """A piece of path for the figures from the present state at ``t``: (t, state, accelerations, riders)."""
+        self.paths.append((float(t), [float(v) for v in self.state], self._accelerations(),
+                           tuple(k for k, on in enumerate(self.riding) if on)))
 
     def tick(self) -> None:
         self.events += 1
@@ -494,8 +497,7 @@ class _Run:
                     s = STATE_PER_BALL * b
                     _, c = self.system.walls[(b, w)]
                     errors.append(self.scene.boundary.gap(w, self.state[s], self.state[s + 1], c))
-            steps, = bonds_module.solve(bonds_module.bond_matrix(directions, mobility), [errors])
-            for b, (dx, dy) in bonds_module.pushes(directions, mobility, steps).items():
+            for b, (dx, dy) in bonds_module.correction(directions, mobility, errors).items():
                 s = STATE_PER_BALL * b
                 self.state[s], self.state[s + 1] = self.state[s] + dx, self.state[s + 1] + dy
 
@@ -510,8 +512,7 @@ class _Run:
         directions, mobility = self._cluster_rows(group, run_type=True)
         velocity = {b: (self.state[STATE_PER_BALL * b + 2], self.state[STATE_PER_BALL * b + 3]) for b in mobility}
         opening = [-v for v in bonds_module.free_work(directions, velocity)]
-        impulses, = bonds_module.solve(bonds_module.bond_matrix(directions, mobility), [opening])
-        for b, (dvx, dvy) in bonds_module.pushes(directions, mobility, impulses).items():
+        for b, (dvx, dvy) in bonds_module.correction(directions, mobility, opening).items():
             s = STATE_PER_BALL * b
             sliding = self._has_slip(b)
             self.state[s + 2], self.state[s + 3] = self.state[s + 2] + dvx, self.state[s + 3] + dvy
