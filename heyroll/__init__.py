@@ -18,17 +18,21 @@ Layers, with one-way imports: ``heyroll.model`` (bodies, tracks, laws) ->
 
 from ._version import __version__
 from .errors import SceneError, SceneFileError
-from .model.bodies import Body, Shape
-from .model.laws import CollisionLaw, GeneralizedNewtonLaw, HedrihRollingLaw, NewtonCentreLaw, make_law
-from .model.frame import Frame
-from .model.scene import RunSettings, Scene
-from .model.tracks import ArcChainTrack, CircleTrack, CurveTrack, Segment, ThreeArcTrack, Track
-from .model.table import (CircleBoundary, EllipseBoundary, PolygonBoundary, RectangleBoundary, TableBall,
-                          TableScene)
 
-# The simulation and interface layers load heyoka and matplotlib: import them
-# on first use, so that the model layer works (and imports fast) without them.
-_LAZY = {
+# Every other name is imported on first use: the model's tracks build heyoka expressions, the interfaces load
+# matplotlib, and ``import heyroll`` (which the ``heyroll`` command does before anything else) stays instant,
+# so a Ctrl-C while the command starts is caught by it (heyroll.__main__) rather than printed as a traceback.
+_MODEL = {
+    "heyroll.model.bodies": ("Body", "Shape"),
+    "heyroll.model.laws": ("CollisionLaw", "GeneralizedNewtonLaw", "HedrihRollingLaw", "NewtonCentreLaw", "make_law"),
+    "heyroll.model.frame": ("Frame",),
+    "heyroll.model.scene": ("RunSettings", "Scene"),
+    "heyroll.model.tracks": ("ArcChainTrack", "CircleTrack", "CurveTrack", "Segment", "ThreeArcTrack", "Track"),
+    "heyroll.model.table": ("CircleBoundary", "EllipseBoundary", "PolygonBoundary", "RectangleBoundary",
+                            "TableBall", "TableScene"),
+}
+_LAZY = {name: (module, name) for module, names in _MODEL.items() for name in names}
+_LAZY |= {
     "simulate": ("heyroll.simulation.driver", "simulate"),
     "simulate_batch": ("heyroll.simulation.batch", "simulate_batch"),
     "Precision": ("heyroll.simulation.precision", "Precision"),
@@ -57,6 +61,10 @@ def __getattr__(name):
         globals()[name] = value
         return value
     raise AttributeError(f"module 'heyroll' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
 
 
 __all__ = [

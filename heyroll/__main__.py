@@ -1,8 +1,29 @@
-"""``python -m heyroll``: the same command line as the ``heyroll`` script (heyroll.interfaces.cli)."""
+"""The ``heyroll`` command (and ``python -m heyroll``): the command line of heyroll.interfaces.cli.
 
+This module imports nothing heavy itself: a Ctrl-C while heyoka and matplotlib load ends the command with one line
+and exit code 130, not a traceback; once the command has returned, its exit code stands (a Ctrl-C landing while
+the interpreter shuts down is ignored: the outputs were whole when it returned).
+"""
+
+import signal
 import sys
 
-from heyroll.interfaces.cli import main
+EXIT_INTERRUPTED = 130
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        from heyroll.interfaces.cli import main as command
+    except KeyboardInterrupt:
+        print("heyroll: interrupted while starting: nothing was run or written", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    code = command(argv)
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread: nothing to guard
+        pass
+    return code
+
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -245,3 +245,38 @@ def test_bad_numbers_are_shown_as_written(tmp_path, capsys):
     assert "track.friction" in err and "got -0.2" in err and "Decimal" not in err
     assert main(["sweep", str(path), "--vary", "collision.restitution=0:1:3", "--workers", "-2"]) == 2
     assert "--workers: must be >= 1, got -2" in capsys.readouterr().err
+
+
+def test_import_heyroll_loads_neither_heyoka_nor_matplotlib():
+    # The command catches a Ctrl-C from its first instruction on only if importing the package is instant.
+    code = "import sys, heyroll; heyroll.__version__; print(sorted(m for m in ('heyoka', 'matplotlib', 'mpmath') if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+    assert heyroll.Scene.__module__ == "heyroll.model.scene" and "TableBall" in dir(heyroll)
+
+
+def test_ctrl_c_while_the_command_starts_is_one_line_and_exit_130(monkeypatch, capsys):
+    import types
+
+    import heyroll.__main__ as entry
+
+    class Loading(types.ModuleType):  # the command's module, interrupted while it loads
+        def __getattr__(self, name):
+            raise KeyboardInterrupt
+
+    monkeypatch.setitem(sys.modules, "heyroll.interfaces.cli", Loading("heyroll.interfaces.cli"))
+    assert entry.main(["run"]) == 130
+    err = capsys.readouterr().err
+    assert err == "heyroll: interrupted while starting: nothing was run or written\n"
+
+
+def test_ctrl_c_outside_a_runs_own_handling_is_one_line_and_exit_130(tmp_path, monkeypatch, capsys):
+    from heyroll.interfaces import cli
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "load_scene", interrupted)  # a Ctrl-C while the scene's file is read
+    assert main(["run", "some.toml", "--out", str(tmp_path / "never")]) == 130
+    assert capsys.readouterr().err == "heyroll: run: interrupted\n"
+    assert not (tmp_path / "never").exists()

@@ -526,3 +526,22 @@ def test_the_cli_passes_precision_and_picks_poincare_points(tmp_path):
     plot = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "plot", str(out / "sweep.zarr"),
                            "--points", "x"], capture_output=True, text=True, timeout=120)
     assert plot.returncode == 2 and "--points" in plot.stderr
+
+
+def test_long_figure_titles_are_broken_to_fit_the_figure():
+    """Acceptance test: a one-key table sweep's title ran past the figure's right edge."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from heyroll.sweep.figures import _title
+
+    fig, ax = plt.subplots(figsize=(7.5, 3))
+    text = "dissipative elliptical billiard: 300 points: cushion impacts among the last 10 impacts each (Birkhoff coordinates)"
+    _title(ax, text, fontsize=10)
+    fig.canvas.draw()
+    shown = ax.title.get_window_extent()
+    assert ax.title.get_text().replace("\n", " ") == text and "\n" in ax.title.get_text()
+    assert 0 <= shown.x0 and shown.x1 <= fig.bbox.x1
+    plt.close(fig)

@@ -158,6 +158,9 @@ def main(argv: list[str] | None = None) -> int:
     except SceneError as exc:
         print(f"heyroll: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except KeyboardInterrupt:  # a Ctrl-C outside a run's own handling (loading, compiling, printing): one line
+        print(f"heyroll: {args.command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 def _run(args) -> int:

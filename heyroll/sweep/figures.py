@@ -19,6 +19,7 @@
 from __future__ import annotations
 
 import json
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -122,7 +123,7 @@ def _bifurcation(ds, key: str, path: Path, title: str) -> Path:
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     bottom.set_xlabel(_label(ds, key))
-    top.set_title(f"{title}, last {ds.sizes['impact']} impacts each (i: the body before the contact)", fontsize=10)
+    _title(top, f"{title}, last {ds.sizes['impact']} impacts each (i: the body before the contact)", fontsize=10)
     return _save(fig, path)
 
 
@@ -141,9 +142,16 @@ def _billiard_bifurcation(ds, key: str, path: Path, title: str) -> Path:
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     bottom.set_xlabel(_label(ds, key))
-    top.set_title(f"{title}: cushion impacts among the last {ds.sizes['impact']} impacts each (Birkhoff "
-                  "coordinates)", fontsize=10)
+    _title(top, f"{title}: cushion impacts among the last {ds.sizes['impact']} impacts each (Birkhoff "
+           "coordinates)", fontsize=10)
     return _save(fig, path)
+
+
+def _title(ax, text: str, fontsize: float = 12) -> None:
+    """``text`` over ``ax``, broken into lines that fit the figure's width (a scene's name and a long
+    description would run past the edge)."""
+    width_pt = ax.figure.get_figwidth() * 72
+    ax.set_title(textwrap.fill(text, width=max(20, int(width_pt / (0.55 * fontsize)))), fontsize=fontsize)
 
 
 def _flat(ds, key: str, name: str, where=None) -> tuple:
@@ -171,7 +179,7 @@ def _scalars_1d(ds, key: str, path: Path, title: str, names: list) -> Path:
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel(_label(ds, key))
-    axes[0, 0].set_title(title)
+    _title(axes[0, 0], title)
     return _save(fig, path)
 
 
@@ -192,8 +200,8 @@ def _map(ds, keys: list, name: str, path: Path, title: str) -> Path:
     ax.set_xlabel(_label(ds, keys[0]))
     ax.set_ylabel(_label(ds, keys[1]))
     missing = int(np.isnan(np.asarray(z.values, dtype=float)).sum())
-    ax.set_title(f"{title}" + (f"; {missing} invalid or not run" + ("" if "point" in ds.dims else " (blank)")
-                               if missing else ""))
+    _title(ax, f"{title}" + (f"; {missing} invalid or not run" + ("" if "point" in ds.dims else " (blank)")
+                             if missing else ""))
     return _save(fig, path)
 
 
