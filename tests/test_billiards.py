@@ -267,6 +267,35 @@ def test_a_rolling_ball_comes_back_from_a_head_on_cushion_at_kappa_minus_1_minus
     assert result.state_final[3] == 0 and result.state_final[4] == result.state_final[5] == 0
 
 
+@pytest.mark.parametrize("vy", ["0", "0.3"])
+def test_bounces_of_a_rolling_ball_driven_back_into_the_cushion_settle_in_their_limit(vy):
+    """k_c < kappa - 1: each bounce leaves the ball sliding back into the cushion, rolling again at
+    r = (kappa - 1 - k_c)/kappa of its normal speed before it returns: impacts at geometric speeds, in a
+    finite time. Acceptance test: the last ones, at one instant, went on to round-off and left 3e-14 m/s into
+    the wall, and the ball bounced again at 1e-14 m/s every few hundred seconds."""
+    scene = table_scene('boundary = "rectangle"\nwidth = 4.0\nheight = 2.0', [ball("1", "0", "1", vy, radius="0.05")],
+                        cushion="slide", cushion_k="0.2", friction="0.2", t_end=2)  # before the corner
+    result = simulate(scene)
+    rows = result.collision_table()
+    kappa, k_c, mu, g, v = 1.4, 0.2, 0.2, 9.81, 1.0
+    r = (kappa - 1 - k_c) / kappa
+    assert rows["vx_i_before"][1:] == pytest.approx(v * r ** np.arange(1, len(rows)), rel=1e-9, abs=0)
+    assert rows["vx_i_after"][:4] == pytest.approx(-k_c * v * r ** np.arange(4), rel=1e-12, abs=0)
+    # the cycle of normal speed u: slide for t1 = (1 + k_c) u (kappa - 1)/(mu g kappa), roll back d/(r u)
+    t1 = (1 + k_c) * v * (kappa - 1) / (mu * g * kappa)
+    cycle = t1 + (k_c * v * t1 - mu * g * t1 ** 2 / 2) / (r * v)
+    assert rows["t"][:4] == pytest.approx(0.95 + cycle * (1 - r ** np.arange(4)) / (1 - r), rel=1e-13, abs=0)
+    # the limit: the last row settles it on the wall (law_flag 4), normal speed 0, the tangential one kept;
+    # its instant is the sequence's to the position resolution over the speed (3.5e-7 s: the bounces of
+    # 1e-6 m/s turn 4e-13 m from the wall)
+    settle = rows[-1]
+    assert settle["law_flag"] == 4 and settle["vx_i_after"] == 0 and settle["vy_i_after"] == float(vy)
+    assert (rows["law_flag"][:-1] == 0).all() and rows["t"][-2] == settle["t"]
+    assert settle["t"] == pytest.approx(0.95 + cycle / (1 - r), abs=1e-6)
+    assert result.state_final[0] == 1.95 and result.state_final[2] == 0
+    assert result.energy_final == pytest.approx(0.5 * kappa * 0.17 * float(vy) ** 2, rel=1e-15, abs=0)
+
+
 def cut_shot(angle):
     """A rolling cue ball hits a resting object ball with the line of centres at ``angle`` (rad) to its path."""
     d = 0.2  # two radii of 0.1
