@@ -50,6 +50,9 @@ PROJECTION_STEPS = 8
 #: (:meth:`_Run.grip_lost`): the motion's error falls a little faster than SKID_ONSET (measured ~8e-12 m/s at
 #: 2^-26, validation/billiards.py section 6), its cost grows as SKID_ONSET^-0.5 (~1400 steps at 2^-26).
 SKID_ONSET = 2.0**-26
+#: A pressed member's skid onset: rounds of friction's impulse and its cluster's holding impulses (each round the
+#: bonds take at most (kappa - 1)/kappa of the slip made: member_skid)
+SKID_IMPULSES = 64
 
 
 def simulate_table(scene: TableScene, opts: RunOptions, sink=None, progress=None) -> TableResult:
@@ -189,7 +192,9 @@ class _Run:
                 self.pull()
                 for k in [k for k, t in self.onsets.items() if t <= self.t]:
                     del self.onsets[k]
-                    if self._grip_excess(k) > 0:
+                    if self.ball_bonds[k]:
+                        self.member_skid(k)
+                    elif self.riding[k] and self._grip_excess(k) > 0:
                         self.start_skid(k, self.skid_onset)
                     else:  # its grip came back meanwhile (a crossing near a tangency): it rolls on, watched
                         self.set_mode(k)
@@ -386,8 +391,13 @@ class _Run:
             return
         self.pars[first + M_SLIDING] = zero + 1 if sliding else zero
         self.pars[first + M_MOBILITY] = self._mobility(k)
-        grips = not sliding and float(self.pars[b + SPIN]) > 0 and float(self.pars[b + MU_G]) > 0
+        grips = not sliding and float(self.pars[b + SPIN]) > 0 and float(self.pars[b + MU_G]) > 0 and \
+            k not in self.onsets  # (its onset pending: pair_grip_lost)
         self.pars[first + M_GRIP] = zero + 1 if grips else zero
+        if grips and self._member_excess(k) > 0:
+            # pushed past its grip already (pressed so, or a bond made or let go, an impact): its event, armed
+            # where the excess is > 0, would never cross (a ball at rest pushed by a spinning one rolled on)
+            self.pair_grip_lost(k)
 
     def _has_slip(self, k: int) -> bool:
         s = STATE_PER_BALL * k
@@ -601,13 +611,80 @@ class _Run:
         self.let_bonds_go([])
 
     def pair_grip_lost(self, k: int) -> None:
-        s = STATE_PER_BALL * k
-        others = sorted({b for bond in self.ball_bonds[k] if bond[0] == "pair" for b in bond_balls(bond)} - {k})
-        what = ", ".join(str(b + 1) for b in others) + (" and the cushion" if self.riding[k] else "")
-        self.stop(Status.FAILED, f"ball {k + 1}, rolling pressed against ball {what}, would need more of the "
-                                 f"cloth's friction than mu m g to roll on at t = {float(self.t):.17g} s (x = "
-                                 f"{float(self.state[s]):.6g}, y = {float(self.state[s + 1]):.6g}): a pressed ball "
-                                 "pushed into sliding is not modelled")
+        """Rolling member k needs more of the cloth's friction than mu m g (the pair_grip event): its bonds push it
+        into sliding. As a rider's grip (:meth:`grip_lost`): it rolls on until its slip would reach SKID_ONSET
+        (the excess e = (kappa - 1)|a_b| - mu g, a_b its bonds' push, growing at e' from 0 now), then slides from
+        there (:meth:`member_skid`); where the excess turns back first it never slides."""
+        b = BALL_PARS * k
+        h = 1e-6 * float(self.system.max_step)
+        rate = (self._member_excess(k, h) - self._member_excess(k, -h)) / (2 * h)
+        wait = _onset_wait(max(self._member_excess(k), 0.0), rate, float(self.pars[b + SPIN]) * float(self.skid_onset))
+        first = self.system.members[k]
+        if wait is None:  # the excess turns back first: it rolls on, watched
+            self.pars[first + M_GRIP] = self.zero + 1
+            return
+        self.onsets[k] = self.t + self.num(wait)
+        self.pars[first + M_GRIP] = self.zero
+
+    def _member_need(self, k: int) -> tuple:
+        """(ax, ay), float: the acceleration member k's bonds give it where the cloth's friction must turn its spin
+        with it (system._bond_terms' grips: every pair bond, a cushion bond where its model does not keep a ball
+        rolling), without Baumgarte's terms."""
+        group = bonds_module.cluster_of(self.bonds, k)
+        matrix, right, directions, mobility, _ = self._bond_system(group)
+        lam, = bonds_module.solve(matrix, [right])
+        keeps = self.scene.cushion.keeps_rolling
+        gripped = [(d, v) for d, v, bond in zip(directions, lam, group) if bond[0] == "pair" or not keeps]
+        return bonds_module.pushes([d for d, _ in gripped], mobility, [v for _, v in gripped]).get(k, (0.0, 0.0))
+
+    def _member_excess(self, k: int, shift: float = 0.0) -> float:
+        """(kappa - 1)|a_b| - mu g of member k (float), the cluster's motion moved ``shift`` seconds on (its
+        members' positions and velocities by their present velocities and accelerations)."""
+        b = BALL_PARS * k
+        saved = None
+        if shift:
+            saved = list(self.state)
+            _, accelerations = self.bond_forces(bonds_module.cluster_of(self.bonds, k))
+            for m, (ax, ay) in accelerations.items():
+                s = STATE_PER_BALL * m
+                vx, vy = float(saved[s + 2]), float(saved[s + 3])
+                self.state[s] = saved[s] + self.num(vx * shift + ax * shift * shift / 2)
+                self.state[s + 1] = saved[s + 1] + self.num(vy * shift + ay * shift * shift / 2)
+                self.state[s + 2], self.state[s + 3] = saved[s + 2] + self.num(ax * shift), saved[s + 3] + self.num(ay * shift)
+        try:
+            nx, ny = self._member_need(k)
+            return float(self.pars[b + SPIN]) * math.hypot(nx, ny) - float(self.pars[b + MU_G])
+        finally:
+            if saved is not None:
+                self.state[:] = saved
+
+    def member_skid(self, k: int) -> None:
+        """Rolling member k starts to slide (its onset, :meth:`pair_grip_lost`) with a slip of SKID_ONSET along its
+        bonds' push (the saturated friction lags it: the contact point moves that way). The slip is made by
+        friction's impulse at the contact, v gaining (kappa - 1)/kappa of it (:meth:`end_slip` in reverse), and the
+        cluster's bonds held by impulses through the centres (:meth:`hold_cluster`: they take part of the member's
+        slip, now that it slides; repeated until the slip is made): neither does work to first order at a rolling
+        contact and a closed bond, so the energy is the rolling motion's to O(SKID_ONSET^2). Then its bonds are
+        judged again."""
+        nx, ny = self._member_need(k)
+        norm = math.hypot(nx, ny)
+        b, s = BALL_PARS * k, STATE_PER_BALL * k
+        if not float(self.pars[b + SPIN]) * norm > float(self.pars[b + MU_G]):
+            self.set_mode(k)  # its grip came back meanwhile: it rolls on, watched
+            return
+        share = self.spin_inertia[k] / (self.spin_inertia[k] + 1)
+        dx, dy = self.num(nx / norm), self.num(ny / norm)
+        for _ in range(SKID_IMPULSES):
+            missing = self.skid_onset - (self.state[s + 4] * dx + self.state[s + 5] * dy)
+            if missing <= self.skid_onset / 4:  # (a slip under SKID_ONSET/2 would end at once: set_mode)
+                break
+            self.state[s + 2], self.state[s + 3] = self.state[s + 2] + share * missing * dx, \
+                self.state[s + 3] + share * missing * dy
+            self.state[s + 4], self.state[s + 5] = self.state[s + 4] + missing * dx, self.state[s + 5] + missing * dy
+            self.hold_cluster(k)
+        for member in sorted({m for bond in bonds_module.cluster_of(self.bonds, k) for m in bond_balls(bond)}):
+            self.set_mode(member)
+        self.let_bonds_go([])
 
     def switch_system(self, balls=()) -> None:
         """The run's system for its bonds now (compiled once per set of bonds), its parameters the scene's part
@@ -706,12 +783,10 @@ class _Run:
         speed = math.hypot(float(self.state[s + 2]), float(self.state[s + 3]))
         h = 1e-6 * float(self.geometry.size)
         rate = speed * (self._grip_excess(k, h) - self._grip_excess(k, -h)) / (2 * h)
-        target = float(self.pars[b + SPIN]) * float(self.skid_onset)
-        reach = excess * excess + 2 * rate * target
-        if reach < 0 or not excess + math.sqrt(reach) > 0:
+        wait = _onset_wait(excess, rate, float(self.pars[b + SPIN]) * float(self.skid_onset))
+        if wait is None:
             self.pars[b + GRIP] = self.zero + 1  # the excess turns back first: it keeps rolling
             return
-        wait = 2 * target / (excess + math.sqrt(reach))  # the root of the quadratic, stable for any sign of e'
         self.onsets[k] = self.t + self.num(wait)
         self.pars[b + GRIP] = self.zero
 
@@ -1603,6 +1678,16 @@ class _Run:
                       "fast_math": bool(self.options.get("fast_math", False))},
             steps=self.steps, riding_final=tuple(k + 1 for k, on in enumerate(self.riding) if on),
         )
+
+
+def _onset_wait(excess: float, rate: float, target: float) -> float | None:
+    """The time t* > 0 at which a slip growing from 0 as (kappa - 1) s' = e + e' t reaches ``target`` = (kappa - 1)
+    SKID_ONSET, e = ``excess`` >= 0, e' = ``rate``: the root of e t + e' t^2/2 = target (stable for any sign of
+    e'); None where the excess turns back first."""
+    reach = excess * excess + 2 * rate * target
+    if reach < 0 or not excess + math.sqrt(reach) > 0:
+        return None
+    return 2 * target / (excess + math.sqrt(reach))
 
 
 def _same(a: Contact, b: Contact) -> bool:

@@ -78,7 +78,7 @@ limit of their accumulating bounces, as a rider's on the cushion): a system of i
 coupled contact forces of each cluster of bonds (balls pressed together in a chain, a pair pressed into a
 cushion one of them rides: that rider's cushion force is then the cluster's, not its own) and their events,
 "release" (a pair bond's multiplier through 0), "bond_lift" (a wall bond's), "pair_roll" (a sliding member's
-slip falls to its slip end), "pair_grip" (a rolling member would need more than mu m g: the run stops); see
+slip falls to its slip end), "pair_grip" (a rolling member would need more than mu m g: it starts to slide, driver._Run.pair_grip_lost); see
 _bond_terms.
 
 Events (terminal; the driver resolves them): one per ball and wall (the
