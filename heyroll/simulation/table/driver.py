@@ -23,7 +23,7 @@ from .bonds import MAX_CLUSTER_BONDS, bond_balls
 from .contacts import Contact, ContactGeometry
 from .resolve import SETTLED, SIMULTANEOUS, Resolver
 from .result import TableResult
-from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, HELD, M_GRIP, M_MOBILITY, M_SLIDING, MODE_PARS, MU_G,
+from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, HELD, M_GRIP, M_MOBILITY, M_SLIDING, MODE_PARS, MU_G, MU_G_U,
                      RIDE_HOLD, RIDE_SPEED2, RIDING, SKID, SLIDING, SPIN, STATE_PER_BALL, integrator, needs_grip,
                      table_system)
 
@@ -616,10 +616,16 @@ class _Run:
         (the excess e = (kappa - 1)|a_b| - mu g, a_b its bonds' push, growing at e' from 0 now), then slides from
         there (:meth:`member_skid`); where the excess turns back first it never slides."""
         b = BALL_PARS * k
+        first = self.system.members[k]
+        if not self._slip_grows(k):
+            # sliding, its slip would shrink at once (a ball its walls hold still, pinned in a corner under the
+            # rolling cushion model, pushed by its pair: it slid, rolled, slid, ... 1e-8 s apart): the friction it
+            # needs is the model's limit, not a slide; it rolls on, no longer watched while its bonds hold
+            self.pars[first + M_GRIP] = self.zero
+            return
         h = 1e-6 * float(self.system.max_step)
         rate = (self._member_excess(k, h) - self._member_excess(k, -h)) / (2 * h)
         wait = _onset_wait(max(self._member_excess(k), 0.0), rate, float(self.pars[b + SPIN]) * float(self.skid_onset))
-        first = self.system.members[k]
         if wait is None:  # the excess turns back first: it rolls on, watched
             self.pars[first + M_GRIP] = self.zero + 1
             return
@@ -657,6 +663,25 @@ class _Run:
         finally:
             if saved is not None:
                 self.state[:] = saved
+
+    def _slip_grows(self, k: int) -> bool:
+        """Rolling member k, sliding with a slip along its bonds' push d, would see that slip grow: u'.d > 0, u' =
+        kappa/(kappa - 1) f + (a - f) (f = -mu g d its friction, a its acceleration in the cluster, its mobility 1/m)."""
+        nx, ny = self._member_need(k)
+        norm = math.hypot(nx, ny)
+        if not norm > 0:
+            return False
+        s, b = STATE_PER_BALL * k, BALL_PARS * k
+        saved = self.state[s + 4], self.state[s + 5]
+        self.state[s + 4], self.state[s + 5] = self.num(nx / norm), self.num(ny / norm)  # (a direction only)
+        try:
+            _, accelerations = self.bond_forces(bonds_module.cluster_of(self.bonds, k))
+            fx, fy = self._free_acceleration(k)
+        finally:
+            self.state[s + 4], self.state[s + 5] = saved
+        ax, ay = accelerations[k]
+        gain = float(self.pars[b + MU_G_U]) / float(self.pars[b + MU_G]) if float(self.pars[b + MU_G]) > 0 else 1.0
+        return (gain * fx + ax - fx) * nx + (gain * fy + ay - fy) * ny > 0
 
     def member_skid(self, k: int) -> None:
         """Rolling member k starts to slide (its onset, :meth:`pair_grip_lost`) with a slip of SKID_ONSET along its
