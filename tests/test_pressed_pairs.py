@@ -347,6 +347,22 @@ def test_a_pressed_pair_riding_a_round_cushion_fast_slides_on_instead_of_stoppin
     assert result.energy_final < table["energy_after"][-1]
 
 
+def test_a_member_its_walls_hold_still_is_not_sent_sliding_by_its_push():
+    """A light ball (kappa = 3) resting in a corner, a heavy one with topspin pressed into it along the diagonal,
+    rolling cushion model: rolling, the pinned ball would need (kappa - 1)|push|/kappa of friction > mu m g (the
+    walls' part needs none under this model), but sliding, its slip would shrink at once (its walls hold its
+    centre): it slid and rolled again every 1e-8 s without end (random scenes). It stays, rolling; ball 1's slip
+    ends and both rest."""
+    spinner = dict(ball("1.75857864376269", "0.75857864376269", "0", "0", mass="1.0"),
+                   wx=-14.142135623730951, wy=14.142135623730951)
+    light = {"kappa": "3.0", "radius": "0.1", "mass": "0.1", "x": "1.9", "y": "0.9"}
+    scene = table_scene(RECTANGLE, [spinner, light], law="newton", k="0", cushion_k="0", friction="0.2", t_end=1.0)
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED and result.n_collisions < 10, result.message
+    state = result.state_final
+    assert [state[6], state[7]] == pytest.approx([1.9, 0.9], abs=1e-12) and result.energy_final < 1e-28
+
+
 def test_balls_pressed_against_a_rider_in_a_polygon_run_on():
     """Three balls of a random polygon scene (fuzz): a ball pressed against one riding the cushion stopped the run
     ('rides the cushion, which turns it into the other: not modelled', t = 0.67 s). Now the pair and the rider's
