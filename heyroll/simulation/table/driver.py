@@ -27,8 +27,12 @@ from .system import (BALL_PARS, DX, DY, FUX, FUY, FVX, FVY, GRIP, HELD, M_GRIP, 
                      RIDE_HOLD, RIDE_SPEED2, RIDING, SKID, SLIDING, SPIN, STATE_PER_BALL, integrator, needs_grip,
                      table_system)
 
-#: Resolutions of one pair with a riding ball at one instant before it counts as pressed together.
+#: Resolutions of one pair with a riding ball at one instant before the sequence is taken to its limit
+#: (_Run.collapse_limit).
 RIDER_PAIR_REPEATS = 32
+#: Rounds of a collapse's sequence, without rows, at most (_Run.collapse_limit): a sequence that shrinks the
+#: normal speeds by 1e-6 a round still ends within it.
+COLLAPSE_ROUNDS = 100_000
 #: The farthest a cushion impact's instant is moved from heyoka's root of the gap polynomial onto the exact
 #: distance's (_Run.polish), in crossing times; a root that far from a contact the ball is not approaching is
 #: spurious (_Run.about_to_touch).
@@ -1052,10 +1056,13 @@ class _Run:
                     rider_hits[key] = rider_hits.get(key, 0) + 1
                     if rider_hits[key] > RIDER_PAIR_REPEATS:
                         # resolved, settled back onto the cushion, met again, at one instant: the cushion turns
-                        # them into each other (it went on 10,000 times: random scenes). Their limit: pressed
-                        # together below (check_pressed_pair) where the pair is driven together; else the run stops
-                        collapsed = contact
-                        break
+                        # them into each other (it went on 10,000 times: random scenes). Their limit: the sequence
+                        # taken on without rows (then pressed together below where the pair is driven together);
+                        # where it does not end either, the run stops
+                        if not self.collapse_limit(near):
+                            collapsed = contact
+                            break
+                        continue
                 if self.bounces_back_at_once(contact):
                     # its limit: the impact and the re-roll, again and again at this instant, shrink the normal
                     # speed by (kappa - 1 - k)/kappa each, the tangential part kept: it settles on the wall, rolling
@@ -1065,6 +1072,10 @@ class _Run:
                     continue
                 group = self._together(contact, near, cleanup)
                 wedged = rider_hits.get((contact.i, contact.j), 0) > RIDER_PAIR_REPEATS // 2
+                if round_ >= SEQUENTIAL_COLLAPSE and self.one_by_one and self.collapse_limit(near):
+                    # (where the simultaneous solution would make energy: the sequence's own limit; a ball between
+                    # two others, plastic both sides, went past 2,000 impacts at one instant: random scenes)
+                    continue
                 if (round_ >= SEQUENTIAL_COLLAPSE or wedged) and not self.one_by_one:
                     # a sequential collapse (k = 0 down a touching row: each impact leaves the next pair approaching,
                     # more slowly, for ever; a cradle of five went past 10,000 impacts; a ball wedged between two
@@ -1124,6 +1135,63 @@ class _Run:
             if self.fired is None or fresh or not _same(c, self.fired) or \
                     not -self.geometry.approach(c, self.state) > self.round_off * self._speed_scale(c):
                 self.leave(c)
+
+    def collapse_limit(self, near: list) -> bool:
+        """The limit of a sequence of impacts that does not end at one instant (a ball in a corner riding one wall,
+        bouncing elastically off the other and plastically off a ball pressed onto it: each round keeps ~90 % of
+        the normal speeds; it stopped the run after 32 rounds: random scenes): the touching contacts of the group
+        resolved one by one, each by its own law (a ridden wall: the normal speed into it removed, as ride()), on
+        the state without rows, until none approaches past round-off, at most COLLAPSE_ROUNDS rounds. Then one row
+        per contact it resolved, law_flag SIMULTANEOUS, the group's energy change on the first. False (the state
+        as it was): the sequence did not end."""
+        group = self._simultaneous_group(near)
+        balls = {c.i for c in group} | {c.j for c in group if c.kind == "pair"}
+        self.release_balls(balls)
+        before = list(self.state)
+        energy_before = self.energy(before)
+        used: list = []
+        for _ in range(COLLAPSE_ROUNDS):
+            waiting = [c for c in group if (self._pressing(c) if self.rides(c) else self.closing(c))]
+            if not waiting:
+                break
+            c = waiting[0]
+            if self.rides(c):
+                self._remove_normal_speed(c.i, c.normal)
+            elif c.kind == "wall":
+                self.resolver.wall(self.state, c.i, c.normal)
+            else:
+                self.resolver.pair(self.state, c.i, c.j, c.normal)
+            if not any(_same(c, u) for u in used):
+                used.append(c)
+        else:
+            self.state = before
+            return False
+        for k in balls:
+            self.onsets.pop(k, None)
+            self.unpin(k)
+            self.set_mode(k)
+        energy_after = self.energy(self.state)
+        for c in used:
+            self.record(c, before, self.state, energy_before, energy_after, SIMULTANEOUS)
+            energy_before = energy_after
+            self.resolved.append(c)
+        return True
+
+    def _pressing(self, contact: Contact) -> bool:
+        """Ball k moves into the wall it rides faster than round-off."""
+        s = STATE_PER_BALL * contact.i
+        into = self.state[s + 2] * contact.normal[0] + self.state[s + 3] * contact.normal[1]
+        speed2 = self.state[s + 2] * self.state[s + 2] + self.state[s + 3] * self.state[s + 3]
+        return into > self.zero and into * into > self.round_off * self.round_off * speed2
+
+    def _remove_normal_speed(self, k: int, normal) -> None:
+        """Ball k's velocity into a wall it rides removed, as ride() does (a sliding ball's slip takes it)."""
+        s = STATE_PER_BALL * k
+        nx, ny = normal
+        vn = self.state[s + 2] * nx + self.state[s + 3] * ny
+        self.state[s + 2], self.state[s + 3] = self.state[s + 2] - vn * nx, self.state[s + 3] - vn * ny
+        if self.slides(k):
+            self.state[s + 4], self.state[s + 5] = self.state[s + 4] - vn * nx, self.state[s + 5] - vn * ny
 
     def _simultaneous_group(self, near: list, first: Contact | None = None) -> list:
         """The touching contacts of one simultaneous solution (``first``: the contact heyoka found). A riding
