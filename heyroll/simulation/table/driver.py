@@ -1024,6 +1024,7 @@ class _Run:
         cleanup = False  # 'impulses' after its simultaneous resolution: what it left, one by one
         rider_hits: dict = {}  # a pair with a riding ball resolved at this instant, how often
         collapsed = None  # such a pair resolved more than RIDER_PAIR_REPEATS times
+        limited: set = set()  # such pairs whose sequence was taken to its limit, "sequential" (collapse_limit)
         for round_ in range(MAX_AT_ONE_INSTANT):
             if self.status is not None:
                 if not impulses:
@@ -1059,9 +1060,11 @@ class _Run:
                         # them into each other (it went on 10,000 times: random scenes). Their limit: the sequence
                         # taken on without rows (then pressed together below where the pair is driven together);
                         # where it does not end either, the run stops
-                        if not self.collapse_limit(near):
-                            collapsed = contact
+                        if key in limited or not self.collapse_limit(near):
+                            collapsed = contact  # (met again after its limit: pressed together, or the run stops)
                             break
+                        limited.add(key)
+                        rider_hits[key] = 0
                         continue
                 if self.bounces_back_at_once(contact):
                     # its limit: the impact and the re-roll, again and again at this instant, shrink the normal
@@ -1072,10 +1075,13 @@ class _Run:
                     continue
                 group = self._together(contact, near, cleanup)
                 wedged = rider_hits.get((contact.i, contact.j), 0) > RIDER_PAIR_REPEATS // 2
-                if round_ >= SEQUENTIAL_COLLAPSE and self.one_by_one and self.collapse_limit(near):
-                    # (where the simultaneous solution would make energy: the sequence's own limit; a ball between
-                    # two others, plastic both sides, went past 2,000 impacts at one instant: random scenes)
-                    continue
+                if round_ >= SEQUENTIAL_COLLAPSE and self.one_by_one and "sequential" not in limited:
+                    # (where the simultaneous solution would make energy: the sequence's own limit, tried once; a
+                    # ball between two others, plastic both sides, went past 2,000 impacts at one instant: random
+                    # scenes. An elastic sequence that does not shrink has none: 0.5 s a try, random scenes)
+                    limited.add("sequential")
+                    if self.collapse_limit(near):
+                        continue
                 if (round_ >= SEQUENTIAL_COLLAPSE or wedged) and not self.one_by_one:
                     # a sequential collapse (k = 0 down a touching row: each impact leaves the next pair approaching,
                     # more slowly, for ever; a cradle of five went past 10,000 impacts; a ball wedged between two
@@ -1156,7 +1162,7 @@ class _Run:
                 break
             c = waiting[0]
             if self.rides(c):
-                self._remove_normal_speed(c.i, c.normal)
+                self._remove_normal_speed(c.i, c.normal, keep_spin=self.slides(c.i) or self.needs_grip[c.i])
             elif c.kind == "wall":
                 self.resolver.wall(self.state, c.i, c.normal)
             else:
@@ -1178,19 +1184,20 @@ class _Run:
         return True
 
     def _pressing(self, contact: Contact) -> bool:
-        """Ball k moves into the wall it rides faster than round-off."""
+        """The ball moves into the wall it rides faster than round-off (as settle_riders records it: ride())."""
         s = STATE_PER_BALL * contact.i
         into = self.state[s + 2] * contact.normal[0] + self.state[s + 3] * contact.normal[1]
         speed2 = self.state[s + 2] * self.state[s + 2] + self.state[s + 3] * self.state[s + 3]
         return into > self.zero and into * into > self.round_off * self.round_off * speed2
 
-    def _remove_normal_speed(self, k: int, normal) -> None:
-        """Ball k's velocity into a wall it rides removed, as ride() does (a sliding ball's slip takes it)."""
+    def _remove_normal_speed(self, k: int, normal, keep_spin: bool) -> None:
+        """Ball k's velocity along the unit ``normal`` removed; ``keep_spin``: its slip takes the change (the
+        spin kept), else its rolling is kept (the slip unchanged)."""
         s = STATE_PER_BALL * k
         nx, ny = normal
         vn = self.state[s + 2] * nx + self.state[s + 3] * ny
         self.state[s + 2], self.state[s + 3] = self.state[s + 2] - vn * nx, self.state[s + 3] - vn * ny
-        if self.slides(k):
+        if keep_spin:
             self.state[s + 4], self.state[s + 5] = self.state[s + 4] - vn * nx, self.state[s + 5] - vn * ny
 
     def _simultaneous_group(self, near: list, first: Contact | None = None) -> list:
@@ -1635,17 +1642,14 @@ class _Run:
         gx, gy = boundary.gradient(w, x, y, c)
         norm = sqrt(gx * gx + gy * gy)
         nx, ny = gx / norm, gy / norm
-        vx, vy = self.state[s + 2], self.state[s + 3]
-        vn = vx * nx + vy * ny
-        self.state[s:s + 4] = [x, y, vx - vn * nx, vy - vn * ny]
-        if sliding or (record and self.needs_grip[k]):
-            # the slide model's cushion pushes through the centre, and a sliding ball's rolling is no rolling
-            # to keep: the spin is kept, the slip takes the change of v (energy then falls by 1/2 m v_n^2;
-            # keeping the slip turned the spin and made energy: +6.8e-9 J, review; so did removing a skidding
-            # rider's drift of 5e-10 m/s, unrecorded: +6.2e-11 J, acceptance test). Not for a rolling rider's
-            # round-off normal speed (record False): that is no impulse, and as a slip of ~1e-17 it made a skid
-            # end at once, an event at every instant of every other ball (measured); its rolling is kept.
-            self.state[s + 4], self.state[s + 5] = self.state[s + 4] - vn * nx, self.state[s + 5] - vn * ny
+        self.state[s], self.state[s + 1] = x, y
+        # the slide model's cushion pushes through the centre, and a sliding ball's rolling is no rolling to keep:
+        # the spin is kept, the slip takes the change of v (energy then falls by 1/2 m v_n^2; keeping the slip
+        # turned the spin and made energy: +6.8e-9 J, review; so did removing a skidding rider's drift of 5e-10 m/s,
+        # unrecorded: +6.2e-11 J, acceptance test). Not for a rolling rider's round-off normal speed (record
+        # False): that is no impulse, and as a slip of ~1e-17 it made a skid end at once, an event at every instant
+        # of every other ball (measured); its rolling is kept.
+        self._remove_normal_speed(k, (nx, ny), keep_spin=sliding or (record and self.needs_grip[k]))
         self.riding[k] = True
         self.set_mode(k)
         if record:
