@@ -1,8 +1,9 @@
 """The ``heyroll`` command (and ``python -m heyroll``): the command line of heyroll.interfaces.cli.
 
 This module imports nothing heavy itself: a Ctrl-C while heyoka and matplotlib load ends the command with one line
-and exit code 130, not a traceback; once the command has returned, its exit code stands (a Ctrl-C landing while
-the interpreter shuts down is ignored: the outputs were whole when it returned).
+and exit code 130, not a traceback. :func:`console`, the script's entry, then ignores a Ctrl-C landing while the
+interpreter shuts down (the outputs were whole when the command returned); :func:`main` leaves the signal alone,
+for callers in a longer-lived process.
 """
 
 import signal
@@ -17,7 +18,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("heyroll: interrupted while starting: nothing was run or written", file=sys.stderr)
         return EXIT_INTERRUPTED
-    code = command(argv)
+    return command(argv)
+
+
+def console() -> int:
+    code = main()
     try:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     except ValueError:  # not the main thread: nothing to guard
@@ -26,4 +31,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(console())

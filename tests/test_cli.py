@@ -280,3 +280,15 @@ def test_ctrl_c_outside_a_runs_own_handling_is_one_line_and_exit_130(tmp_path, m
     assert main(["run", "some.toml", "--out", str(tmp_path / "never")]) == 130
     assert capsys.readouterr().err == "heyroll: run: interrupted\n"
     assert not (tmp_path / "never").exists()
+
+
+def test_the_command_called_in_process_leaves_ctrl_c_alone(tmp_path):
+    """Review: heyroll.__main__.main() set SIGINT to be ignored for the rest of the calling process (a notebook,
+    a test run); only the script's entry (console) does, once the command has returned."""
+    import signal
+
+    import heyroll.__main__ as entry
+
+    before = signal.getsignal(signal.SIGINT)
+    assert entry.main(["run", "--out", str(tmp_path / "o"), "--max-collisions", "2", "--no-figures"]) == 0
+    assert signal.getsignal(signal.SIGINT) is before
