@@ -396,6 +396,57 @@ def test_review_scenes_of_clusters_and_grazes_complete(name):
     assert np.all((table["energy_after"] <= table["energy_before"] + tolerance) | (table["j"] > 0))
 
 
+def test_a_plastic_break_in_a_corner_moves_on():
+    """Acceptance test: a plastic break's balls at a corner made bond rows every 8e-14 s (3,000 rows in 1.2e-10 s,
+    the whole break 2 h of wall time to its default limit). It runs through its 1 s."""
+    result = bond_review("plastic_break_corner")
+    assert result.status is Status.COMPLETED, result.message
+    assert result.n_collisions < 5000
+
+
+def test_a_lone_impact_under_impulses_goes_by_the_scenes_law():
+    """Acceptance test: a ball's cushion impacts were solved together with a touching pair at rest elsewhere on the
+    table (law_flag 2); each set of contacts linked through balls is its own solution, one impact alone the law's."""
+    scene = table_scene('boundary = "rectangle"\nwidth = 4.0\nheight = 2.0',
+                        [ball("0.0", "0.0", "1.0", "0.3"), ball("-1.5", "-0.5", "0", "0"), ball("-1.3", "-0.5", "0", "0")],
+                        law="newton", simultaneous="impulses", t_end=6)
+    table = simulate(scene).collision_table()
+    assert list(table["law_flag"]) == [0, 0, 0] and list(table["j"]) == [0, 0, 0]
+
+
+def test_a_corner_hit_is_one_solution_under_the_sequential_policy_too():
+    """Acceptance test: the wall that fired was resolved alone first, then the corner's other: two rows with flags 0
+    and 2, each with part of the loss. One solution: both rows law_flag 2, the energy change on the first."""
+    scene = table_scene('boundary = "rectangle"\nwidth = 4.0\nheight = 2.0', [ball("1.0", "0.0", "1.0", "1.0",
+                        radius="0.1")], cushion_k="0.8", t_end=1.2)  # both walls at t = 0.9
+    result = simulate(scene)
+    table = result.collision_table()
+    assert list(table["law_flag"]) == [2, 2] and table["t"][0] == table["t"][1]
+    assert table["energy_after"][1] == table["energy_before"][1] == table["energy_after"][0]
+    assert list(result.state_final[2:4]) == pytest.approx([-0.8, -0.8], rel=1e-15, abs=0)
+
+
+def test_a_rack_written_to_17_digits_starts_touching():
+    """Acceptance test: a triangular rack's places are irrational; written to 17 digits two touching balls came out
+    1e-15 closer than touching and the scene was refused (exact decimal check). Within ~16 ulps of the places
+    they start touching; a real overlap of 1e-12 m is still refused."""
+    import math
+
+    from heyroll.errors import SceneError
+
+    r = 0.028575
+    rack = [ball("0.0", "0.0", "0", "0", radius=repr(r))]
+    rack.append(ball(repr(2 * r * math.cos(math.pi / 6)), repr(r), "0", "0", radius=repr(r)))
+    rack.append(ball(repr(2 * r * math.cos(math.pi / 6)), repr(-r), "0", "0", radius=repr(r)))
+    cue = ball("-1.0", "0.0", "2.0", "0", radius=repr(r))
+    result = simulate(table_scene('boundary = "rectangle"\nwidth = 2.54\nheight = 1.27', [cue] + rack, t_end=1))
+    assert result.status is Status.COMPLETED, result.message
+    with pytest.raises(SceneError, match="overlaps"):
+        table_scene('boundary = "rectangle"\nwidth = 2.54\nheight = 1.27',
+                    [ball("0.0", "0.0", "0", "0", radius=repr(r)), ball(repr(2 * r - 1e-12), "0.0", "0", "0",
+                                                                       radius=repr(r))])
+
+
 def test_a_rack_in_a_sixty_degree_corner_with_dependent_contacts_says_so():
     """Three balls racked into a 60 degree corner and struck: seven contacts on six degrees of freedom, the bonds'
     forces undetermined (the elimination divided by round-off: overlaps, hangs; review). The run now stops with

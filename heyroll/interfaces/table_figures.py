@@ -115,7 +115,7 @@ def table_paths_figure(result, path: Path) -> None:
     ax = fig.add_subplot()
     bx, by = scene.boundary.outline()
     ax.plot(bx, by, color="k", lw=1.5, label="cushion")
-    colours = [f"C{k % 10}" for k in range(scene.n_bodies)]
+    colours = _ball_colours(scene.n_bodies)
     for k, polylines in enumerate(path_points(result)):
         for x, y, sliding in polylines:
             ax.plot(x, y, color=colours[k], lw=0.8, ls="--" if sliding else "-", alpha=0.8)
@@ -127,7 +127,7 @@ def table_paths_figure(result, path: Path) -> None:
             ax.plot(float(ball.x) + r * np.cos(t), float(ball.y) + r * np.sin(t), color=colours[k], lw=0.8)
     c = caustic(result)
     if c is not None:
-        ax.plot(*c, color="0.5", lw=1, ls=":", label="caustic")
+        ax.plot(*c, color="0.3", lw=1.2, ls=":", label="caustic", zorder=5)  # over the paths (acceptance test)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
@@ -143,9 +143,10 @@ def birkhoff_figure(result, path: Path) -> None:
     cushion = table[table["j"] == 0]
     fig = Figure(figsize=(8, 4.5))
     ax = fig.add_subplot()
+    colours = _ball_colours(result.scene.n_bodies)
     for k in range(result.scene.n_bodies):
         rows = cushion[cushion["i"] == k + 1]
-        ax.plot(rows["boundary_s"], np.sin(rows["reflection_angle"]), ".", ms=2, color=f"C{k % 10}",
+        ax.plot(rows["boundary_s"], np.sin(rows["reflection_angle"]), ".", ms=2, color=colours[k],
                 label=f"ball {k + 1}")
     ax.set_xlim(0, result.scene.boundary.perimeter())
     ax.set_ylim(-1, 1)
@@ -180,3 +181,16 @@ def portrait_figure(scene, launches: list, path: Path) -> None:
     ax.set_title(f"Birkhoff map of {len(launches)} launches ({total} cushion impacts), one colour per launch\n"
                  f"{scene.boundary.describe()}, ball radius {float(scene.balls[0].body.radius):.4g} m", fontsize=9)
     _save(fig, path)
+
+
+def _ball_colours(n: int) -> list:
+    """One colour per ball: matplotlib's ten, then tab20's, then a colormap (ball 11 had ball 1's colour:
+    acceptance test)."""
+    import matplotlib
+
+    if n <= 10:
+        return [f"C{k}" for k in range(n)]
+    if n <= 20:
+        return [matplotlib.colormaps["tab20"](k) for k in range(n)]
+    cmap = matplotlib.colormaps["turbo"]
+    return [cmap((k + 0.5) / n) for k in range(n)]

@@ -921,7 +921,7 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
     if reason == "failed":
         return Status.FAILED, log.stop.message
     if outcome == hy.taylor_outcome.time_limit:
-        return Status.COMPLETED, f"reached t_end = {float(t_end):.17g} s after {log.count} collisions"
+        return Status.COMPLETED, f"reached t_end = {float(t_end)!r} s after {log.count} collisions"
     return Status.FAILED, f"the integrator stopped with outcome {outcome!s}"
 
 

@@ -137,7 +137,7 @@ def _check_table(key: Key, data: dict, unknown, numeric) -> None:
     if head == "bodies":
         bodies = data.get("bodies") if isinstance(data.get("bodies"), list) else []
         if index is None or len(path) != 2 or not 1 <= index <= len(bodies):
-            unknown(f"name a ball and a field, e.g. bodies[1].vx (the table has {len(bodies)} balls, from 1)")
+            unknown(f"name a ball and a field, e.g. bodies[1].vx (the table has {len(bodies)} ball{'' if len(bodies) == 1 else 's'}, from 1)")
         numeric(path[1][0], tf.TABLE_BODY_KEYS, f"bodies[{index}] on a table")
         return
     # the track's fields of this scene's boundary only (track.radius on an ellipse was accepted and every point

@@ -213,7 +213,7 @@ class _Run:
                 continue
             if outcome == time_limit:
                 self.pull()
-                self.stop(Status.COMPLETED, f"reached t_end = {float(self.t_end):.17g} s after {self.count} impacts")
+                self.stop(Status.COMPLETED, f"reached t_end = {float(self.t_end)!r} s after {self.count} impacts")
                 break
             if outcome == step_limit:
                 if ta.time == before:
@@ -1026,7 +1026,14 @@ class _Run:
         impulses = self.scene.simultaneous == "impulses"
         near = None  # the touching contacts of the state as it now is
         if fired is not None and not impulses:
-            self.resolve(fired)
+            # a ball that meets a cushion in a corner meets both walls at once: one solution, as in the rounds below
+            # (the fired wall alone first split a corner hit into two rows, flags 0 and 2: acceptance test)
+            corner = [c for c in self._together(fired, self.touching(), False) if not _same(c, fired)] \
+                if fired.kind == "wall" else []
+            if corner and not self.one_by_one:
+                self.simultaneous([fired] + corner)
+            else:
+                self.resolve(fired)
         first = fired if impulses else None
         cleanup = False  # 'impulses' after its simultaneous resolution: what it left, one by one
         rider_hits: dict = {}  # a pair with a riding ball resolved at this instant, how often
@@ -1045,11 +1052,20 @@ class _Run:
                 approaching = [c for c in touching if self.closing(c)]
                 if not approaching:
                     break
-                if len(touching) > 1 and not self.one_by_one:
-                    self.simultaneous(touching)
-                    cleanup = True
-                else:  # one impact alone: the scene's law itself
+                if self.one_by_one:
                     self.resolve(approaching[0] if first is None or not _same(first, approaching[0]) else first)
+                else:
+                    # each set of touching contacts linked through their balls to one that approaches is one
+                    # solution; one impact alone goes by the scene's law itself (a lone cushion impact was solved
+                    # with a touching pair at rest elsewhere on the table, and flagged 2: acceptance test)
+                    for group in _linked(touching, approaching):
+                        if len(group) > 1:
+                            self.simultaneous(group)
+                        else:
+                            self.resolve(first if first is not None and _same(first, group[0]) else group[0])
+                        if self.one_by_one or self.status is not None:
+                            break
+                    cleanup = True
                 first = None
             else:
                 # 'impulses' leaves nothing approaching to its solver's tolerance (projected Gauss-Seidel beyond
@@ -1418,7 +1434,7 @@ class _Run:
             why = ("it did not settle onto the cushion" if self.system.ride else
                    "impacts accumulate: the ball settles onto the cushion; riding it is modelled only for k < 1")
             self.stop(Status.FAILED, f"ball {k + 1} moves along the curved cushion at t = {float(self.t):.17g} s with a "
-                                     f"normal speed {float(vn / sqrt(speed2)):.3g} of its speed, too slow to resolve its "
+                                     f"normal speed {abs(float(vn / sqrt(speed2))):.3g} of its speed, too slow to resolve its "
                                      f"next impact ({why})")
             return
         # sliding friction, also a skid's along another wall (a corner); a cluster's member: its bonds' forces too
@@ -1820,6 +1836,31 @@ class _Run:
                       "fast_math": bool(self.options.get("fast_math", False))},
             steps=self.steps, riding_final=tuple(k + 1 for k, on in enumerate(self.riding) if on),
         )
+
+
+def _linked(contacts: list, approaching: list) -> list:
+    """The ``contacts`` in sets linked through shared balls (a wall contact holds its ball, a pair both), each set
+    that holds one of ``approaching``, in the order of its first contact."""
+    owner: dict = {}  # ball -> set index
+    sets: list = []
+    for c in contacts:
+        balls = (c.i,) if c.kind == "wall" else (c.i, c.j)
+        found = sorted({owner[b] for b in balls if b in owner})
+        if not found:
+            sets.append([c])
+            index = len(sets) - 1
+        else:
+            index = found[0]
+            sets[index].append(c)
+            for other in found[1:]:  # merge later sets into the first
+                sets[index].extend(sets[other])
+                sets[other] = []
+                for b, i in owner.items():
+                    if i == other:
+                        owner[b] = index
+        for b in balls:
+            owner[b] = index
+    return [group for group in sets if group and any(any(_same(c, a) for a in approaching) for c in group)]
 
 
 def _onset_wait(excess: float, rate: float, target: float) -> float | None:
