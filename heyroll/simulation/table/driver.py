@@ -1208,15 +1208,7 @@ class _Run:
         else:
             self.state = before
             return False
-        for k in balls:
-            self.onsets.pop(k, None)
-            self.unpin(k)
-            self.set_mode(k)
-        energy_after = self.energy(self.state)
-        for c in used:
-            self.record(c, before, self.state, energy_before, energy_after, SIMULTANEOUS)
-            energy_before = energy_after
-            self.resolved.append(c)
+        self._impulses_done(balls, before, energy_before, used)
         return True
 
     def _pressing(self, contact: Contact) -> bool:
@@ -1740,17 +1732,21 @@ class _Run:
                 self.resolve(waiting[0])
             return
         balls = {c.i for c in contacts} | {c.j for c in contacts if c.kind == "pair"}
+        self._impulses_done(balls, before, energy_before, [c for c, lam in zip(contacts, impulses) if lam > self.zero])
+
+    def _impulses_done(self, balls, before, energy_before, contacts: list) -> None:
+        """After impulses on ``balls`` that moved the state from ``before``: each ball's mode and grip judged again,
+        one row per contact that took an impulse (law_flag SIMULTANEOUS), the group's energy change on the first
+        (the rows' changes add up to the run's)."""
         for k in balls:
-            self.onsets.pop(k, None)
+            self.onsets.pop(k, None)  # its velocity changed: its grip is judged again (grip_or_skid)
             self.unpin(k)
             self.set_mode(k)
         energy_after = self.energy(self.state)
-        for c, lam in zip(contacts, impulses):
-            if lam > self.zero:
-                # the group's energy change once, on its first row (the rows' changes add up to the run's)
-                self.record(c, before, self.state, energy_before, energy_after, SIMULTANEOUS)
-                energy_before = energy_after
-                self.resolved.append(c)
+        for c in contacts:
+            self.record(c, before, self.state, energy_before, energy_after, SIMULTANEOUS)
+            energy_before = energy_after
+            self.resolved.append(c)
 
     def record(self, contact: Contact, before, after, energy_before, energy_after, flag) -> None:
         i = contact.i
@@ -1839,28 +1835,12 @@ class _Run:
 
 
 def _linked(contacts: list, approaching: list) -> list:
-    """The ``contacts`` in sets linked through shared balls (a wall contact holds its ball, a pair both), each set
-    that holds one of ``approaching``, in the order of its first contact."""
-    owner: dict = {}  # ball -> set index
-    sets: list = []
-    for c in contacts:
-        balls = (c.i,) if c.kind == "wall" else (c.i, c.j)
-        found = sorted({owner[b] for b in balls if b in owner})
-        if not found:
-            sets.append([c])
-            index = len(sets) - 1
-        else:
-            index = found[0]
-            sets[index].append(c)
-            for other in found[1:]:  # merge later sets into the first
-                sets[index].extend(sets[other])
-                sets[other] = []
-                for b, i in owner.items():
-                    if i == other:
-                        owner[b] = index
-        for b in balls:
-            owner[b] = index
-    return [group for group in sets if group and any(any(_same(c, a) for a in approaching) for c in group)]
+    """The ``contacts`` in sets linked through shared balls (bonds.clusters: a contact is named as a bond is), each
+    set that holds one of ``approaching``, each in the order of ``contacts``."""
+    order = {(c.kind, c.i, c.j): n for n, c in enumerate(contacts)}
+    groups = sorted((sorted(group, key=order.get) for group in bonds_module.clusters(order)), key=lambda g: order[g[0]])
+    return [[contacts[order[name]] for name in group] for group in groups
+            if any(name[0] == a.kind and name[1] == a.i and name[2] == a.j for name in group for a in approaching)]
 
 
 def _onset_wait(excess: float, rate: float, target: float) -> float | None:
