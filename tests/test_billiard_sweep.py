@@ -64,7 +64,7 @@ def test_table_keys_a_map_and_its_invalid_points(tmp_path, capsys):
 @pytest.mark.parametrize("key, says", [
     ("track.boundary", "no numeric field 'boundary'"),
     ("bodies[1].phi", "no numeric field 'phi'"),
-    ("bodies[2].x", "balls"),
+    ("bodies[2].x", "the table has 1 ball,"),
     ("frame.omega", "numeric fields are in"),
 ])
 def test_keys_a_table_does_not_have_are_one_line(key, says, tmp_path):
