@@ -292,3 +292,22 @@ def test_the_command_called_in_process_leaves_ctrl_c_alone(tmp_path):
     before = signal.getsignal(signal.SIGINT)
     assert entry.main(["run", "--out", str(tmp_path / "o"), "--max-collisions", "2", "--no-figures"]) == 0
     assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_an_interrupted_run_says_how_to_skip_its_figures(tmp_path, monkeypatch, capsys):
+    """Acceptance test: after a Ctrl-C a long run's figures took 14 s more, unannounced; it now says Ctrl-C again
+    skips them (one line on stderr; the table and summary.json are written first)."""
+    import dataclasses
+
+    from heyroll.interfaces import cli
+    from heyroll.simulation.result import Status
+
+    real = cli.simulate
+
+    def interrupted(*args, **kwargs):
+        return dataclasses.replace(real(*args, **kwargs), status=Status.INTERRUPTED, message="interrupted at t = ...")
+
+    monkeypatch.setattr(cli, "simulate", interrupted)
+    assert main(["run", "--out", str(tmp_path / "o"), "--max-collisions", "3"]) == 130
+    assert "Ctrl-C again to skip them" in capsys.readouterr().err
+    assert {"collisions.csv", "summary.json", "phase_portrait.png"} <= {p.name for p in (tmp_path / "o").iterdir()}

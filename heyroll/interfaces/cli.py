@@ -191,6 +191,10 @@ def _run(args) -> int:
                 high_accuracy=args.high_accuracy, tolerance=tolerance, fast_math=args.fast, sink=sink,
                 progress=progress,
             )
+        if result.status.value == "interrupted" and not args.no_figures:
+            # the figures of a long run take a while (14 s for 60,000 impacts): say how to skip them
+            print("interrupted: writing the table and summary.json, then the figures (Ctrl-C again to skip them)",
+                  file=sys.stderr, flush=True)
         with _sigterm_as_interrupt():
             write_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures,
                       sink=sink)
