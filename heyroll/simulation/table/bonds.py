@@ -125,10 +125,9 @@ def bond_matrix(directions: list, mobility: dict) -> list:
     return matrix
 
 
-def solve(matrix: list, right_sides: list) -> list:
-    """Solutions of ``matrix`` x = b for each b of ``right_sides``: Gaussian elimination without pivoting (the
-    matrix is symmetric positive definite), None entries zero. Works on any numbers with + - * / (heyoka
-    expressions, floats, the run's type)."""
+def _eliminate(matrix: list, right_sides: list) -> tuple:
+    """Gaussian elimination without pivoting, forward: (the upper triangle, its pivots on the diagonal; the right
+    sides carried along). None entries are zero."""
     m = len(matrix)
     a = [row[:] for row in matrix]
     bs = [list(b) for b in right_sides]
@@ -143,6 +142,15 @@ def solve(matrix: list, right_sides: list) -> list:
                     a[i][j] = -factor * a[p][j] if a[i][j] is None else a[i][j] - factor * a[p][j]
             for b in bs:
                 b[i] = b[i] - factor * b[p]
+    return a, bs
+
+
+def solve(matrix: list, right_sides: list) -> list:
+    """Solutions of ``matrix`` x = b for each b of ``right_sides``: Gaussian elimination without pivoting (the
+    matrix is symmetric positive definite), None entries zero. Works on any numbers with + - * / (heyoka
+    expressions, floats, the run's type)."""
+    m = len(matrix)
+    a, bs = _eliminate(matrix, right_sides)
     solutions = []
     for b in bs:
         x = [None] * m
@@ -160,16 +168,12 @@ def independent(matrix: list, tolerance: float = 2.0**-30) -> bool:
     """The bonds' directions are independent: every pivot of the elimination of A = J W J^T (floats) above
     ``tolerance`` times its diagonal entry. Dependent bonds (three balls racked into a 60 degree corner: seven
     contacts on six degrees of freedom) leave the forces undetermined and the elimination divides by round-off."""
-    m = len(matrix)
-    a = [[0.0 if v is None else float(v) for v in row] for row in matrix]
-    for p in range(m):
-        if not a[p][p] > tolerance * float(matrix[p][p]):
-            return False
-        for i in range(p + 1, m):
-            factor = a[i][p] / a[p][p]
-            for j in range(p + 1, m):
-                a[i][j] -= factor * a[p][j]
-    return True
+    floats = [[None if v is None else float(v) for v in row] for row in matrix]
+    try:
+        a, _ = _eliminate(floats, [])
+    except ZeroDivisionError:  # a pivot of exactly 0
+        return False
+    return all(a[p][p] > tolerance * floats[p][p] for p in range(len(matrix)))
 
 
 def complementary(matrix: list, right: list) -> list:

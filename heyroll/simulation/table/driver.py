@@ -1030,10 +1030,7 @@ class _Run:
             # (the fired wall alone first split a corner hit into two rows, flags 0 and 2: acceptance test)
             corner = [c for c in self._together(fired, self.touching(), False) if not _same(c, fired)] \
                 if fired.kind == "wall" else []
-            if corner and not self.one_by_one:
-                self.simultaneous([fired] + corner)
-            else:
-                self.resolve(fired)
+            self._resolve_group(fired, [fired] + corner)
         first = fired if impulses else None
         cleanup = False  # 'impulses' after its simultaneous resolution: what it left, one by one
         rider_hits: dict = {}  # a pair with a riding ball resolved at this instant, how often
@@ -1059,10 +1056,8 @@ class _Run:
                     # solution; one impact alone goes by the scene's law itself (a lone cushion impact was solved
                     # with a touching pair at rest elsewhere on the table, and flagged 2: acceptance test)
                     for group in _linked(touching, approaching):
-                        if len(group) > 1:
-                            self.simultaneous(group)
-                        else:
-                            self.resolve(first if first is not None and _same(first, group[0]) else group[0])
+                        self._resolve_group(first if first is not None and _same(first, group[0]) else group[0],
+                                            group)
                         if self.one_by_one or self.status is not None:
                             break
                     cleanup = True
@@ -1112,10 +1107,7 @@ class _Run:
                     # the touching contacts resolved together (the 'impulses' solution: at k = 0 on a row, every
                     # ball at the row's common speed, as the sequence's limit)
                     group = self._simultaneous_group(near)
-                if len(group) > 1:
-                    self.simultaneous(group)
-                else:
-                    self.resolve(contact)
+                self._resolve_group(contact, group)
         else:
             self.stop(Status.FAILED, f"more than {MAX_AT_ONE_INSTANT} impacts at t = {float(self.t):.17g} s "
                                      "(an inelastic collapse): stopped")
@@ -1177,6 +1169,14 @@ class _Run:
             if self.fired is None or fresh or not _same(c, self.fired) or \
                     not -self.geometry.approach(c, self.state) > self.round_off * self._speed_scale(c):
                 self.leave(c)
+
+    def _resolve_group(self, contact: Contact, group: list) -> None:
+        """``group`` (``contact`` and the touching contacts resolved with it) in one solution, or ``contact`` alone
+        by the scene's law."""
+        if len(group) > 1:
+            self.simultaneous(group)
+        else:
+            self.resolve(contact)
 
     def collapse_limit(self, near: list) -> bool:
         """The limit of a sequence of impacts that does not end at one instant (a ball in a corner riding one wall,
