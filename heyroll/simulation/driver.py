@@ -14,6 +14,7 @@ import contextlib
 import dataclasses
 import functools
 import gc
+import itertools
 import math
 import signal
 import threading
@@ -742,16 +743,19 @@ def records_to_arrays(records: list, n_bodies: int, modes: list | None = None) -
     times = np.array(t)
     numbers = np.array(number, dtype=np.int64)
     flags = np.array(flag, dtype=np.int64)
-    try:
-        before = np.array(state).reshape(n, 2 * nb)
-    except ValueError:  # the fast path's states carry slip velocities after the rates (rough tracks)
-        before = np.array([r[: 2 * nb] for r in state]).reshape(n, 2 * nb)
+    width = 2 * nb
+    if type(state[0][0]) is float and sum(map(len, state)) == n * width:  # double precision, no slip velocities
+        # (np.fromiter: a third of np.array's time on a list of lists)
+        before = np.fromiter(itertools.chain.from_iterable(state), float, count=n * width).reshape(n, width)
+    else:  # the fast path's states carry slip velocities after the rates (rough tracks)
+        before = np.array([r[:width] for r in state]).reshape(n, width)
     after = before.copy()
     if None not in rate_i:  # every record from the hot path
         bodies = pair_bodies(nb)[numbers]
-        rows = np.arange(n)
-        after[rows, nb + bodies[:, 0]] = rate_i
-        after[rows, nb + bodies[:, 1]] = rate_j
+        flat = after.reshape(-1)  # (a view: flat indices cost less than row and column ones)
+        rates = np.arange(nb, n * width, width)  # each row's first rate
+        flat[rates + bodies[:, 0]] = rate_i
+        flat[rates + bodies[:, 1]] = rate_j
         return (times, numbers, before, after, flags) + extra
     fast = np.array([k for k, r in enumerate(rate_i) if r is not None], dtype=np.int64)
     if fast.size:
