@@ -345,7 +345,8 @@ def test_collapses_at_one_instant_go_to_their_limit():
     result = bond_review("rider_wedge_collapse")
     assert result.status is Status.COMPLETED, result.message
     table = result.collision_table()
-    at = table[table["t"] == 2.6409912598576804]
+    at = table[np.abs(table["t"] - 2.64099125986) < 1e-9]  # (one instant; chaos moves it by ulps of the roundings)
+    assert len(set(at["t"])) == 1
     assert 32 < len(at) < 100 and list(at["law_flag"]).count(2) >= 2  # the limit: SIMULTANEOUS rows
     assert np.all(at["energy_after"] <= at["energy_before"] + 1e-14 * result.energy_initial)
     assert np.all(at["energy_before"][1:] <= at["energy_after"][:-1] + 1e-14 * result.energy_initial)
@@ -464,3 +465,37 @@ def test_max_collisions_overshot_by_an_instant_says_how_many_were_written():
                                   simultaneous="impulses", t_end=5.0), max_collisions=1)
     assert result.status is Status.MAX_COLLISIONS and result.n_collisions == len(result.collision_table()["t"])
     assert result.n_collisions > 1 and f"({result.n_collisions} written" in result.message
+
+
+def test_an_elastic_reflection_rounds_once_from_the_exact_one():
+    """with_normal on doubles: v - 2 (v.n) n / |n|^2 for the floats n as given, computed exactly and rounded
+    once (review: the plain formula with a float unit normal, |n|^2 != 1, drifted the energy linearly)."""
+    from fractions import Fraction
+
+    from heyroll.model.table.laws import with_normal
+
+    rng = np.random.default_rng(11)
+    for _ in range(500):
+        theta, phi, speed = rng.uniform(0, 2 * np.pi), rng.uniform(0, 2 * np.pi), rng.uniform(0.1, 3)
+        n = (math.cos(theta), math.sin(theta))
+        v = (speed * math.cos(phi), speed * math.sin(phi))
+        vn_new = -0.7 * (v[0] * n[0] + v[1] * n[1])
+        exact_v, exact_n = [Fraction(x) for x in v], [Fraction(x) for x in n]
+        f = (Fraction(vn_new) - (exact_v[0] * exact_n[0] + exact_v[1] * exact_n[1])) / (exact_n[0] ** 2
+                                                                                         + exact_n[1] ** 2)
+        assert with_normal(v, n, vn_new) == (float(exact_v[0] + f * exact_n[0]), float(exact_v[1] + f * exact_n[1]))
+
+
+@pytest.mark.parametrize("boundary", ['boundary = "circle"\nradius = 1.5',
+                                      'boundary = "polygon"\nvertices = [[-1.0,-0.8],[1.1,-0.9],[1.4,0.3],[0.2,1.2],'
+                                      '[-1.2,0.5]]'])
+def test_energy_at_k1_on_a_circle_and_a_polygon_is_a_random_walk_not_a_drift(boundary):
+    """Review: one rolling ball at k = 1 lost 2.8e-16 of its energy per impact on a circle (gained 3.1e-16 on a
+    pentagon), linearly: -2.8e-12 after 1e4 impacts. A random walk of half-ulp roundings stays near 1e-14."""
+    text = scene_toml(f'{boundary}\ncushion_model = "rolling"\ncushion_restitution = 1.0\nfriction = 0.2',
+                      [{"shape": "solid_sphere", "radius": 0.13, "mass": 0.5, "x": 0.11, "y": -0.07, "vx": 0.9,
+                        "vy": 0.61}], 'law = "hedrih"\nrestitution = 1.0', t_end=1e7)
+    result = simulate(parse_scene(text), max_collisions=10_000)
+    assert result.n_collisions == 10_000
+    drift = (float(result.energy_final) - float(result.energy_initial)) / float(result.energy_initial)
+    assert abs(drift) < 2e-14, drift

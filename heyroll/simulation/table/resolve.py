@@ -24,7 +24,7 @@ from __future__ import annotations
 from itertools import combinations
 
 from ...model.table import TableScene
-from ...model.table.laws import after_impact
+from ...model.table.laws import after_impact, with_normal
 from ...model.table.laws.ball_ball.newton import NewtonTableLaw
 from ..precision import Precision
 from .contacts import Contact
@@ -93,7 +93,7 @@ class Resolver:
             # reverses the normal rolling rate), so that k = 1 keeps both energies
             w = (vx - ux, vy - uy)
             wn = w[0] * normal[0] + w[1] * normal[1]
-            w = (w[0] - (1 + self.k_cushion) * wn * normal[0], w[1] - (1 + self.k_cushion) * wn * normal[1])
+            w = with_normal(w, normal, -self.k_cushion * wn)
             u = (v[0] - w[0], v[1] - w[1])
         state[STATE_PER_BALL * k + 2:STATE_PER_BALL * (k + 1)] = [v[0], v[1], u[0], u[1]]
         return SCENE_LAW
