@@ -79,3 +79,15 @@ def test_random_scenes_all_end_in_a_success_status(tmp_path):
                               capture_output=True, text=True, timeout=1800)
         assert done.returncode == 0, done.stderr
         assert "Runs not ending in completed, max_collisions, max_events: 0" in done.stdout, done.stdout[-3000:]
+
+
+def test_ellipse_limit_study_counts_every_launch(tmp_path):
+    report = tmp_path / "ellipse_limit.md"
+    out = run_script("ellipse_limit.py", "--fractions", "0.9", "--launches", "1", "--t-end", "0.5",
+                     "--output", str(report))
+    assert report.read_text(encoding="utf-8").strip() == out.strip()
+    rows = table_rows(out)
+    assert [(r[2], r[3]) for r in rows] == [("rolling", "1"), ("rolling", "0"), ("slide", "1"), ("slide", "0")]
+    for r in rows:  # runs = success + overlap + failed; far from the limit every launch succeeds
+        assert int(r[4]) == int(r[5]) + int(r[6]) + int(r[7]) == 1
+        assert r[5] == "1"
