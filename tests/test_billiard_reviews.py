@@ -499,3 +499,20 @@ def test_energy_at_k1_on_a_circle_and_a_polygon_is_a_random_walk_not_a_drift(bou
     assert result.n_collisions == 10_000
     drift = (float(result.energy_final) - float(result.energy_initial)) / float(result.energy_initial)
     assert abs(drift) < 2e-14, drift
+
+
+def test_a_ball_started_along_an_elastic_curved_cushion_rides_it():
+    """Fuzz: a ball started on a circular cushion moving along it at k_c = 1 stopped the run at t = 0 ('riding it
+    is modelled only for k < 1'). It rides the cushion (the limit of elastic chords of vanishing angle): uniform
+    circular motion of its centre on the circle of radius R_t - R, energy kept."""
+    speed, rho = 1.2, 0.45
+    text = scene_toml('boundary = "circle"\nradius = 0.5\ncushion_model = "rolling"\ncushion_restitution = 1.0\n'
+                      'friction = 0.2', [{"shape": "solid_sphere", "radius": 0.05, "mass": 0.17, "x": rho, "y": 0.0,
+                                          "vx": 0.0, "vy": speed}], 'law = "hedrih"\nrestitution = 1.0', t_end=2.0)
+    result = simulate(parse_scene(text))
+    assert result.status is Status.COMPLETED, result.message
+    assert result.riding_final == (1,)
+    x, y = float(result.state_final[0]), float(result.state_final[1])
+    angle = speed * 2.0 / rho
+    assert (x, y) == pytest.approx((rho * math.cos(angle), rho * math.sin(angle)), abs=1e-13)
+    assert float(result.energy_final) == pytest.approx(float(result.energy_initial), rel=1e-12)
