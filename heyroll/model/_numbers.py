@@ -124,3 +124,22 @@ def from_exact_state(state):
 
 
 _MPF, _DATACLASS, _SEQUENCE, _PLAIN = range(4)
+
+
+#: Dekker's splitter for doubles, 2^27 + 1: x = hi + lo with halves of 26 bits whose products are exact.
+DEKKER_SPLIT = 134217729.0
+
+
+def halves(x: float) -> tuple[float, float]:
+    """x = hi + lo exactly, each of at most 26 significant bits (Dekker's split)."""
+    c = DEKKER_SPLIT * x
+    hi = c - (c - x)
+    return hi, x - hi
+
+
+def two_product(a: float, b: float) -> tuple[float, float]:
+    """a b = p + e exactly, p the rounded product (Dekker's two-product, no fused multiply-add needed)."""
+    p = a * b
+    ah, al = halves(a)
+    bh, bl = halves(b)
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl

@@ -33,7 +33,7 @@ import mpmath
 import numpy as np
 
 from ..model.laws import GeneralizedNewtonLaw, ImpulseMap, impulse_map
-from ..model._numbers import workprec
+from ..model._numbers import DEKKER_SPLIT, halves, workprec
 from .resolve.friction import slipping, slipping_law
 from .compiled_cache import by_constants
 from .system import SceneSystem, overlap_tolerance, unit_acceleration, unit_jerk
@@ -690,8 +690,6 @@ def _double_double(x) -> tuple[float, float]:
     return hi, float(mpmath.mpf(x) - hi)
 
 
-#: Dekker's splitter: c = 2^27 + 1; x = hi + lo with halves of 26 bits whose products are exact.
-_SPLIT = 134217729.0
 
 
 def _double_double_map(q, a_i, a_j):
@@ -702,10 +700,10 @@ def _double_double_map(q, a_i, a_j):
     qh, ql = q
     aih, ail = a_i
     ajh, ajl = a_j
-    qh1, qh2 = _halves(qh)
-    aih1, aih2 = _halves(aih)
-    ajh1, ajh2 = _halves(ajh)
-    S = _SPLIT
+    qh1, qh2 = halves(qh)
+    aih1, aih2 = halves(aih)
+    ajh1, ajh2 = halves(ajh)
+    S = DEKKER_SPLIT
 
     def apply(vi, vj):
         c = S * vj
@@ -740,12 +738,6 @@ def _slipping_map(scene, system, i, j, holder) -> WorkingMap:
     """The working map of a collision where a rolling body slips (resolve.friction.slipping_law)."""
     law, bi, bj = slipping_law(scene, i, j, slipping(holder, i, scene), slipping(holder, j, scene))
     return working_map(impulse_map(law, bi, bj, scene.sigma(i), scene.sigma(j)), system.precision)
-
-
-def _halves(x: float) -> tuple[float, float]:
-    c = _SPLIT * x
-    hi = c - (c - x)
-    return hi, x - hi
 
 
 def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float,

@@ -20,6 +20,8 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import mpmath
 
+from ..._numbers import two_product
+
 
 @runtime_checkable
 class BallLaw(Protocol):
@@ -72,22 +74,6 @@ def with_normal(v, n, vn_new):
     return v[0] + f * n[0], v[1] + f * n[1]
 
 
-#: Dekker's splitter for doubles: 2^27 + 1.
-_SPLIT = 134217729.0
-
-
-def _two_product(a: float, b: float) -> tuple:
-    """a b = p + e exactly (Dekker)."""
-    p = a * b
-    c = _SPLIT * a
-    ah = c - (c - a)
-    al = a - ah
-    c = _SPLIT * b
-    bh = c - (c - b)
-    bl = b - bh
-    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
-
-
 def _add(ah: float, al: float, bh: float, bl: float) -> tuple:
     """(ah + al) + (bh + bl) as a normalised double-double (Knuth's two-sum on the heads)."""
     s = ah + bh
@@ -99,16 +85,16 @@ def _add(ah: float, al: float, bh: float, bl: float) -> tuple:
 
 def _with_normal_rounded_once(vx: float, vy: float, nx: float, ny: float, vn_new: float) -> tuple:
     """:func:`with_normal` on doubles: every product exact, every sum with its error, rounded once."""
-    vn = _add(*_two_product(vx, nx), *_two_product(vy, ny))
-    nn = _add(*_two_product(nx, nx), *_two_product(ny, ny))
+    vn = _add(*two_product(vx, nx), *two_product(vy, ny))
+    nn = _add(*two_product(nx, nx), *two_product(ny, ny))
     dh, dl = _add(vn_new, 0.0, -vn[0], -vn[1])
     q = dh / nn[0]  # f = d / |n|^2: one Newton correction of the quotient
-    ph, pl = _two_product(q, nn[0])
+    ph, pl = two_product(q, nn[0])
     rh, rl = _add(dh, dl, -ph, -pl - q * nn[1])
     fh, fl = _add(q, 0.0, rh / nn[0], 0.0)
     out = []
     for v, c in ((vx, nx), (vy, ny)):
-        ph, pl = _two_product(fh, c)
+        ph, pl = two_product(fh, c)
         out.append(_add(v, 0.0, ph, pl + fl * c)[0])
     return out[0], out[1]
 
