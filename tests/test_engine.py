@@ -194,3 +194,24 @@ def test_rolling_law_outcome_that_keeps_bodies_approaching():
     assert stopped.status is Status.INCONSISTENT and not stopped.success
     assert "still approach" in stopped.message and f"collision {stopped.n_collisions} " in stopped.message
     assert stopped.n_collisions == int(np.argmax(table["law_flag"] == 1)) + 1
+
+
+def test_a_plastic_pair_in_a_turning_hoop_merges_and_keeps_its_jacobi_integral():
+    """Acceptance test: a cluster on a circle in a turning plane raised a traceback (heyoka cannot differentiate
+    by the member's coordinate psi + o), and the cluster's equation was the fixed plane's (-W sin), which lost
+    the centrifugal force: the Jacobi integral drifted by 5e-2 J while the pair rode together. Now the pair
+    merges, and its Jacobi integral (the run's energy column on a turning plane) stays to round-off."""
+    from heyroll.interfaces.scene_file import parse_scene
+
+    text = ('[track]\ntype = "circle"\nradius = 1.0\n[frame]\nomega = 1.0\naxis_x = 0.0\n'
+            '[[bodies]]\nshape = "disk"\nradius = 0.1\nmass = 1.0\nphi = -0.6\ndphi = 0.0\n'
+            '[[bodies]]\nshape = "ring"\nradius = 0.15\nmass = 0.5\nphi = 0.4\ndphi = 0.0\n'
+            '[collision]\nlaw = "newton"\nrestitution = 0.0\n')
+    scene = parse_scene(text)
+    result = heyroll.simulate(scene, t_end=5.0)
+    assert result.status is heyroll.Status.COMPLETED, result.message
+    (interval,) = result.contact_intervals
+    assert interval["open"] and interval["t_start"] < 2.0
+    last = float(result.collision_table()["energy_after"][-1])
+    for t_end in (2.0, 3.5, 5.0):
+        assert float(heyroll.simulate(scene, t_end=t_end).energy_final) == pytest.approx(last, rel=1e-13)

@@ -113,8 +113,8 @@ class Track(Protocol):
 
 def lagrangian_terms(x_c, y_c, q, v, kappa, dyn: Dynamics) -> BodyTerms:
     """The default equation of motion and forces from the centre's path C(q) (see the module doc)."""
-    dx, dy = hy.diff(x_c, q), hy.diff(y_c, q)
-    ddx, ddy = hy.diff(dx, q), hy.diff(dy, q)
+    dx, dy = _by_coordinate(x_c, q), _by_coordinate(y_c, q)
+    ddx, ddy = _by_coordinate(dx, q), _by_coordinate(dy, q)
     F = dx * dx + dy * dy
     sigma = hy.sqrt(F)
     g = dyn.par(dyn.g)
@@ -131,6 +131,17 @@ def lagrangian_terms(x_c, y_c, q, v, kappa, dyn: Dynamics) -> BodyTerms:
         driving = driving + dyn.par(om2) * arm * dx
     return BodyTerms(x_c=x_c, y_c=y_c, acceleration=force / F, normal=normal / sigma, sigma=sigma,
                      driving=driving / sigma)
+
+
+def _by_coordinate(f, q):
+    """df/dq. q is a state variable, or a cluster member's coordinate psi + o (o a parameter): heyoka
+    differentiates by variables only (a turning circle's cluster raised 'Derivatives are currently supported
+    only with respect to variables and parameters': acceptance test), so by psi, through dq/dpsi (= 1)."""
+    names = hy.get_variables(q)
+    if len(names) != 1 or str(q) == names[0]:
+        return hy.diff(f, q)
+    psi = hy.make_vars(names[0])
+    return hy.diff(f, psi) / hy.diff(q, psi)
 
 
 def first_integral(track: Track, body: Body, q, dq, g, frame: Frame) -> np.ndarray:
