@@ -545,3 +545,22 @@ def test_long_figure_titles_are_broken_to_fit_the_figure():
     assert ax.title.get_text().replace("\n", " ") == text and "\n" in ax.title.get_text()
     assert 0 <= shown.x0 and shown.x1 <= fig.bbox.x1
     plt.close(fig)
+
+
+def test_a_rough_track_sweep_keeps_its_last_impacts_and_period(tmp_path):
+    """Acceptance test: --keep impacts:M (or period) on a rough track raised 'too many values to unpack' (the
+    run's records carry the friction modes too) and left a store of '' statuses."""
+    text = ('[track]\ntype = "circle"\nradius = 1.2\nfriction = 0.15\nstatic_friction = 0.25\n'
+            '[[bodies]]\nshape = "particle"\nmass = 0.5\nphi = -0.8\ndphi = 0.0\n'
+            '[[bodies]]\nshape = "particle"\nmass = 0.8\nphi = 0.6\ndphi = -1.5\n'
+            '[collision]\nlaw = "newton"\nrestitution = 0.7\n')
+    ds = run_sweep(scene_text=text, vary={"collision.restitution": "0.5:0.9:2"}, keep="impacts:3,period", t_end=40.0,
+                   workers=1, out=tmp_path)
+    for k, value in enumerate(["0.5", "0.9"]):
+        result = heyroll.simulate(heyroll.parse_scene(text.replace("restitution = 0.7", f"restitution = {value}")),
+                                  t_end=40.0)
+        point = ds.isel({"collision.restitution": k})
+        assert str(point["status"].values) == result.status.value
+        kept = [t for t in point["impact_t"].values.tolist() if t == t]  # (NaN after a run's last impact)
+        assert kept == result.collision_table()["t"][-3:].tolist() and kept
+        assert "period" in ds

@@ -107,7 +107,7 @@ class LastImpacts:
         """The kept records as collision-table rows (numbered as in the whole run)."""
         if self._last is None:
             return build_collision_table(self.scene, self.pairs, self.precision, [], [], [], [], [])
-        times, numbers, before, after, flags = self._last
+        times, numbers, before, after, flags = self._last[:5]  # (a rough track adds its friction modes)
         return build_collision_table(self.scene, self.pairs, self.precision, times, numbers, before, after, flags,
                                      first_number=self.rows - len(times) + 1)
 
