@@ -215,3 +215,31 @@ def test_a_plastic_pair_in_a_turning_hoop_merges_and_keeps_its_jacobi_integral()
     last = float(result.collision_table()["energy_after"][-1])
     for t_end in (2.0, 3.5, 5.0):
         assert float(heyroll.simulate(scene, t_end=t_end).energy_final) == pytest.approx(last, rel=1e-13)
+
+
+def test_bodies_placed_touching_in_doubles_on_a_circle_are_accepted_and_a_real_overlap_is_not():
+    """Acceptance test: phi_2 = phi_1 + beta computed in doubles came out 2.3e-17 rad short of touching and the
+    scene was refused as overlapping (a touching row, a cradle, could not be placed); beta was printed to 10
+    digits. Round-off passes (the pair starts in contact); an overlap of 1e-10 rad is refused with beta to 17."""
+    import mpmath
+
+    from heyroll.errors import SceneError
+    from heyroll.interfaces.scene_file import parse_scene
+
+    beta = 2 * mpmath.asin(mpmath.mpf("0.1") / mpmath.mpf("0.9"))
+    p1, p2 = 0.16997526567716803, 0.16997526567716803 + float(beta)
+    assert mpmath.mpf(p2) - mpmath.mpf(p1) - beta < 0  # short of touching by round-off
+
+    def text(phi2):
+        body = '[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nphi = {!r}\ndphi = {}\n'
+        return ('[track]\ntype = "circle"\nradius = 1.0\n' + body.format(p1 - 0.5, 2.0) + body.format(p1, 0.0)
+                + body.format(phi2, 0.0) + '[collision]\nlaw = "newton"\nrestitution = 1.0\n')
+
+    result = heyroll.simulate(parse_scene(text(p2)), t_end=0.3)
+    assert result.status is heyroll.Status.COMPLETED
+    assert result.contact_intervals[0]["t_start"] == 0.0  # bodies 2 and 3 start in contact
+    with mpmath.workprec(256):
+        digits = mpmath.nstr(2 * mpmath.asin(mpmath.mpf("0.1") / mpmath.mpf("0.9")), 17)
+    with pytest.raises(SceneError, match=r"bodies\[3\]\.phi") as error:
+        parse_scene(text(p2 - 1e-10))
+    assert f"beta = {digits} rad" in str(error.value) and len(digits) == 19
