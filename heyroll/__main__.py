@@ -6,10 +6,45 @@ interpreter shuts down (the outputs were whole when the command returned); :func
 for callers in a longer-lived process.
 """
 
+import os
 import signal
 import sys
 
 EXIT_INTERRUPTED = 130
+
+
+class _PipeSafe:
+    """stdout whose reader may go away (``heyroll run ... | head -1``): output past that is dropped and the
+    command goes on to write its files and exit as it would (it raised BrokenPipeError: a traceback, and a run
+    stopped half-way; acceptance test)."""
+
+    def __init__(self, stream):
+        self._stream, self._gone = stream, False
+
+    def write(self, text):
+        if not self._gone:
+            try:
+                return self._stream.write(text)
+            except BrokenPipeError:
+                self._reader_gone()
+        return len(text)
+
+    def flush(self):
+        if not self._gone:
+            try:
+                self._stream.flush()
+            except BrokenPipeError:
+                self._reader_gone()
+
+    def _reader_gone(self):
+        self._gone = True
+        try:  # the interpreter's last flush of the real stream must not fail either
+            os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
+        except (OSError, ValueError):
+            pass
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -22,6 +57,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def console() -> int:
+    sys.stdout = _PipeSafe(sys.stdout)
     code = main()
     try:
         signal.signal(signal.SIGINT, signal.SIG_IGN)

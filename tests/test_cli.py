@@ -311,3 +311,14 @@ def test_an_interrupted_run_says_how_to_skip_its_figures(tmp_path, monkeypatch, 
     assert main(["run", "--out", str(tmp_path / "o"), "--max-collisions", "3"]) == 130
     assert "Ctrl-C again to skip them" in capsys.readouterr().err
     assert {"collisions.csv", "summary.json", "phase_portrait.png"} <= {p.name for p in (tmp_path / "o").iterdir()}
+
+
+def test_a_reader_that_goes_away_leaves_the_run_whole(tmp_path):
+    """Acceptance test: `heyroll run ... | head -1` raised BrokenPipeError at the first line (a traceback, exit 1,
+    the run stopped before it started). Output past a closed pipe is dropped; the run completes and writes."""
+    process = subprocess.Popen([sys.executable, "-m", "heyroll", "run", "--out", str(tmp_path), "--no-figures",
+                                "--t-end", "50", "--progress", "off"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process.stdout.close()  # the reader is gone before the first line
+    errors = process.stderr.read().decode()
+    assert process.wait() == 0 and "Traceback" not in errors
+    assert json.loads((tmp_path / "summary.json").read_text())["status"] == "completed"
