@@ -73,8 +73,8 @@ def test_forced_run_has_stroboscopic_section(forced_run, tmp_path):
     assert forced_run.scene.forcing is not None and forced_run.dense is None
     assert forced_run.strobe_table.shape[0] > 0
     files = friction_figures(forced_run, str(tmp_path))
-    _check(files, tmp_path, {"friction_portrait", "friction_energy", "stroboscopic"})
-    assert files["stroboscopic"] == "stroboscopic.png"
+    _check(files, tmp_path, {"friction_portrait", "friction_energy", "stroboscopic_figure"})
+    assert files["stroboscopic_figure"] == "stroboscopic.png"
 
 
 def test_forced_run_without_samples_has_no_stroboscopic_section(forced_run, tmp_path):

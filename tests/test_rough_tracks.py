@@ -9,6 +9,7 @@ work integrated with the motion, mu = 0 reproduces the smooth runs.
 from __future__ import annotations
 
 import csv
+import json
 import math
 import subprocess
 import sys
@@ -374,6 +375,13 @@ def test_the_cli_writes_transitions_and_the_stroboscopic_section(tmp_path):
     with open(out / "stroboscopic.csv") as fh:
         strobe = list(csv.reader(fh))
     assert strobe[0] == ["n", "t", "x_1", "x_2", "dx_1", "dx_2"] and len(strobe) == 3  # t = 0, pi (t_end 6)
+    # with figures summary.json lists the table and the figure (the figure's key took the table's: acceptance test)
+    figures = tmp_path / "figures"
+    run = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "run", str(path), "--out", str(figures)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    files = json.loads((figures / "summary.json").read_text())["files"]
+    assert files["stroboscopic"] == "stroboscopic.csv" and files["stroboscopic_figure"] == "stroboscopic.png"
     bad = path.with_name("bad.toml")
     bad.write_text(ROUGH_SCENE.replace("static_friction = 0.2", "static_friction = 0.01"))
     run = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "run", str(bad), "--out",

@@ -370,7 +370,7 @@ def _billiard_portrait(args) -> int:
         lines += [f"{k},{run['theta']:.17g},{run['p']:.17g},{n},{s:.17g},{q:.17g}"
                   for n, (s, q) in enumerate(zip(run["s"], run["sin_angle"]), start=1)]
     atomic_write_text(out / "birkhoff_portrait.csv", "\n".join(lines) + "\n")
-    portrait_figure(scene, launches, out / "birkhoff_portrait.png")
+    portrait_figure(scene, launches, out / "birkhoff_portrait.png", ball=ball)
     stopped = [f"{k}: {run['status']}" for k, run in enumerate(launches, start=1)
                if run["status"] not in ("max_collisions", "completed")]
     print(f"{len(launches)} launches of ball {ball}, {sum(len(r['s']) for r in launches)} cushion impacts"

@@ -68,7 +68,8 @@ def friction_figures(result: SimulationResult, out_dir) -> dict[str, str]:
 
     Returns {name: file name in out_dir}: keys "friction_portrait", "friction_energy" and,
     for a forced run (``result.scene.forcing is not None``) with stroboscopic samples,
-    "stroboscopic".
+    "stroboscopic_figure" (the key "stroboscopic" is the table's, stroboscopic.csv: the figure's took it over
+    in summary.json, acceptance test).
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -79,7 +80,7 @@ def friction_figures(result: SimulationResult, out_dir) -> dict[str, str]:
     files["friction_energy"] = "friction_energy.png"
     if result.scene.forcing is not None and _strobe(result).shape[0] > 0:
         stroboscopic_figure(result, out / "stroboscopic.png")
-        files["stroboscopic"] = "stroboscopic.png"
+        files["stroboscopic_figure"] = "stroboscopic.png"
     if result.scene.forcing is not None and _impacts(result)[0].size:
         impact_map_figure(result, out / "impact_map.png")
         files["impact_map"] = "impact_map.png"

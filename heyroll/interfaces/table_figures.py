@@ -164,8 +164,9 @@ def _aspect(scene) -> float:
     return float(np.clip(height / width, 0.4, 1.5)) if width > 0 else 1.0
 
 
-def portrait_figure(scene, launches: list, path: Path) -> None:
-    """The Birkhoff map of many launches (heyroll.analysis.billiard_portrait), one colour per launch."""
+def portrait_figure(scene, launches: list, path: Path, ball: int = 1) -> None:
+    """The Birkhoff map of many launches of ball ``ball`` (from 1; heyroll.analysis.billiard_portrait), one
+    colour per launch."""
     import matplotlib
 
     fig = Figure(figsize=(8, 5))
@@ -179,7 +180,8 @@ def portrait_figure(scene, launches: list, path: Path) -> None:
     ax.set_ylabel("sin(reflection angle)")
     total = sum(len(run["s"]) for run in launches)
     ax.set_title(f"Birkhoff map of {len(launches)} launches ({total} cushion impacts), one colour per launch\n"
-                 f"{scene.boundary.describe()}, ball radius {float(scene.balls[0].body.radius):.4g} m", fontsize=9)
+                 f"{scene.boundary.describe()}, ball {ball} of radius {float(scene.balls[ball - 1].body.radius):.4g} m",
+                 fontsize=9)
     _save(fig, path)
 
 
