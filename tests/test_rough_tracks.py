@@ -682,3 +682,16 @@ def test_an_impact_that_turns_the_reaction_turns_the_side_friction_pushes_from()
     assert all(w > 0 for w in result.friction_work)
     lost = float(result.energy_initial) - float(result.energy_final)
     assert lost == pytest.approx(sum(result.friction_work), abs=1e-12)
+
+
+def test_the_validation_report_says_friction_works_between_collisions(tmp_path):
+    """Acceptance test: the validate report of a rough track said each body keeps its mechanical energy between
+    collisions."""
+    from types import SimpleNamespace
+
+    from heyroll import simulate
+    from heyroll.interfaces.report import section_energy
+
+    result = simulate(parse_scene(ROUGH_SCENE), t_end=2.0)
+    text = "\n".join(section_energy(SimpleNamespace(double=result, out_dir=tmp_path, figures=[])))
+    assert "keeps its own mechanical energy" not in text and "the work of friction" in text

@@ -244,11 +244,17 @@ def section_energy(ctx: ReportContext) -> list[str]:
     ctx.figures.append("energy.png")
     nb = result.n_bodies
     head = " | ".join(f"E{k + 1} before | E{k + 1} after" for k in range(nb))
+    scene = result.scene
+    if scene.rough or scene.forcing is not None:  # (the text said energy was kept on a rough track: review)
+        between = ("Between collisions each body's mechanical energy changes by the work of "
+                   + ("friction" if scene.forcing is None else "friction and the forcing" if scene.rough
+                      else "the forcing") + "; at a collision")
+    else:
+        between = "Between collisions each body keeps its own mechanical energy (eq. 26); at a collision"
     lines = [
         "## Energy jumps at collisions (paper 4.2.6)",
         "",
-        "Between collisions each body keeps its own mechanical energy (eq. 26); at a collision the "
-        "representative points jump between phase curves and energy moves from body to body. "
+        f"{between} the representative points jump between phase curves and energy moves from body to body. "
         "ΔE(law) is eq. (15); ΔE(state) is the change of the total computed from the states.",
         "",
         "![energy](energy.png)",
