@@ -516,3 +516,16 @@ def test_a_ball_started_along_an_elastic_curved_cushion_rides_it():
     angle = speed * 2.0 / rho
     assert (x, y) == pytest.approx((rho * math.cos(angle), rho * math.sin(angle)), abs=1e-13)
     assert float(result.energy_final) == pytest.approx(float(result.energy_initial), rel=1e-12)
+
+
+def test_a_member_settling_onto_its_cushion_bonds_it_instead_of_letting_its_pair_go():
+    """Acceptance test: two balls riding one cushion, pressed together with no force between them: each press let
+    ball 1's cushion go (no force), it met the cushion 6e-5 s later and settled, which let its pair go, and the
+    pair met again 3e-4 s later: 7 rows each time, t_end = 20 s not reached in 150 s of wall time. A member
+    settling onto its cushion now bonds the cushion into its cluster."""
+    result = bond_review("riders_pressed_on_one_cushion")
+    assert result.status is Status.COMPLETED, result.message
+    assert result.n_collisions < 1000
+    table = result.collision_table()
+    assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
+    assert np.all(table["energy_before"][1:] <= table["energy_after"][:-1] * (1 + 1e-14))

@@ -1676,6 +1676,8 @@ class _Run:
         (the slip changed as v). With ``record`` it is one row of the impact table,
         law_flag SETTLED, whose energy change is what the rest of the accumulation would dissipate.
         """
+        if self.ball_bonds[k] and self.joins_cluster_on_cushion(k, self.ride_wall[k] if wall is None else wall, record):
+            return
         self.release_balls((k,))  # (riding and pressed together at once is not modelled: check_pressed_pair)
         s = STATE_PER_BALL * k
         w = self.ride_wall[k] = self.ride_wall[k] if wall is None else wall
@@ -1709,6 +1711,34 @@ class _Run:
             self.record(Contact("wall", k, w, (nx, ny), self.zero), before, self.state, energy_before,
                         self.energy(self.state), SETTLED)
         self.grip_or_skid(k)
+
+    def joins_cluster_on_cushion(self, k: int, wall: int, record: bool) -> bool:
+        """Member k of a cluster of bonds settles onto its cushion: the cushion joins the cluster as a bond of k
+        (as a rider's does when it is pressed, :meth:`new_bonds`), its centre projected and its normal speed
+        removed by the cluster's holding impulses (one row, law_flag SETTLED, with ``record``). Its pair bonds
+        were let go instead, and the pair, riding the cushion together with no force between them, met again
+        3e-4 s later, pressed, let the cushion go, settled, ... 7 rows each time (acceptance test). False where
+        the cluster cannot hold it (:meth:`why_not_pressed`'s limits): it is let go of its bonds and rides."""
+        bond = ("wall", k, wall)
+        cluster = bonds_module.cluster_of(self.bonds | {bond}, k)
+        if len(cluster) > MAX_CLUSTER_BONDS or \
+                not bonds_module.independent(bonds_module.bond_matrix(*self._cluster_rows(cluster))):
+            return False
+        before = list(self.state)
+        energy_before = self.energy(before)
+        self.ride_wall[k], self.riding[k] = wall, True
+        self._bond(bond)
+        self.project_cluster(k)
+        self.hold_cluster(k)
+        self.onsets.pop(k, None)
+        self.switch_system((k,))
+        if record:
+            s = STATE_PER_BALL * k
+            _, normal = self.geometry.wall(k, wall, self.state[s], self.state[s + 1])
+            self.record(Contact("wall", k, wall, normal, self.zero), before, self.state, energy_before,
+                        self.energy(self.state), SETTLED)
+        self.let_bonds_go([], pressed=True)  # a bond the new one leaves without force lets go
+        return True
 
     def simultaneous(self, contacts: list) -> None:
         self.release_balls({c.i for c in contacts} | {c.j for c in contacts if c.kind == "pair"})
