@@ -268,7 +268,7 @@ def _other_handlers(scene, system, log, holder, time_scale, pieces, handlers, se
         from .resolve.bounds import make_bound_callback
 
         function = body_function(system)
-        handlers += [make_bound_callback(scene, system, ev, log, holder, pieces, time_scale, function)
+        handlers += [make_bound_callback(scene, system, ev, log, holder, pieces, time_scale, function, settle)
                      for ev in system.bound_events]
     handlers += [_stopper(log, "release", {"bodies": (k,)}) for k in system.release_events]
     handlers += [_track_stopper(log, ev, holder, system) for ev in system.track_events if ev.terminal]

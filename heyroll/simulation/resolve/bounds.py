@@ -47,8 +47,9 @@ def parameters_on_pieces(scene, system, pieces) -> list:
     return params
 
 
-def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, function):
-    """The callback of a piece end; ``pieces[k]`` is the piece body k is on (kept per run)."""
+def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, function, settle=None):
+    """The callback of a piece end; ``pieces[k]`` is the piece body k is on (kept per run); ``settle``: the
+    mode's contact settler, for a neighbour touching the body as it rebounds."""
     k = event.body
     body = scene.bodies[k]
     track = scene.track
@@ -102,6 +103,9 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
             # The rest of its cluster runs on into it: the contacts are resolved as collisions.
             stop.reason, stop.data = "release", {"bodies": (k,)}
             return False
-        return True
+        # A neighbour touching it at this instant (a collision has just sent it into the stop) now approaches
+        # from a gap of 0.0, where its collision event cannot fire: it ran on into the body unseen (status
+        # overlap, acceptance test). The settler resolves it now, as after a collision.
+        return settle is None or settle(s, t, [u])
 
     return on_bound

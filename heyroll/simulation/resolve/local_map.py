@@ -223,6 +223,14 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
         by_unit.setdefault(a, []).append(number)
         by_unit.setdefault(b, []).append(number)
     max_rounds = 64 * system.n_bodies
+    # each place in the state -> the places of its cluster's members: a collision with a member moves them all,
+    # and their other contacts are looked at again too (a cluster hit from one side ran on into a body touching
+    # its other side at that instant, unseen: status overlap, acceptance test)
+    together: dict[int, list[int]] = {}
+    for unit in system.units:
+        places = [system.state_index(m) for m in unit.members]
+        for place in places:
+            together[place] = places
 
     def values(s, number, t=0.0):
         base = CONTACT_VALUES * number
@@ -242,9 +250,10 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
     def settle(s, t, units, skip_open=None, skip_merge=()) -> bool:
         if function is None:
             return True
-        pending = list(units)
-        if len(where) > 2 and len(pending) <= 2:  # after a collision (the mode's start looks at every body)
-            pending += [u for u in touching_elsewhere(s) if u not in units]
+        after_collision = len(units) <= 2  # (the mode's start looks at every body)
+        pending = list(dict.fromkeys(p for u in units for p in together.get(u, [u])))
+        if len(where) > 2 and after_collision:
+            pending += [u for u in touching_elsewhere(s) if u not in pending]
         seen, rounds = set(pending), 0
         while pending:
             unit = pending.pop()
@@ -264,8 +273,9 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
                     if not resolvers[number](s, t, holder[1]):
                         return False
                     _sync_friction(holder, s, t)
-                    pending += [a, b]
-                    seen.update((a, b))
+                    moved = together.get(a, [a]) + together.get(b, [b])
+                    pending += moved
+                    seen.update(moved)
                     continue
                 if number not in skip_merge and below_resolution(
                         max(float(rate), 0.0), float(acc), k, float(t), scale, time_scale, eps, float(jerk)):
