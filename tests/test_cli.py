@@ -322,3 +322,13 @@ def test_a_reader_that_goes_away_leaves_the_run_whole(tmp_path):
     errors = process.stderr.read().decode()
     assert process.wait() == 0 and "Traceback" not in errors
     assert json.loads((tmp_path / "summary.json").read_text())["status"] == "completed"
+
+
+@pytest.mark.parametrize("value", ["-1e-10", "-2.5E+3", "-.5e1"])
+def test_a_negative_number_with_an_exponent_gets_the_options_own_rule(value, tmp_path, capsys):
+    """Acceptance test: `--tolerance -1e-10` gave argparse's 'expected one argument' (it took the value for an
+    option); `--tolerance=-1e-10` gave the option's own one-line error. Both give that now."""
+    assert main(["run", "--out", str(tmp_path / "out"), "--tolerance", value]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--tolerance" in err[0] and "expected one argument" not in err[0]
+    assert not (tmp_path / "out").exists()

@@ -12,6 +12,7 @@ import contextlib
 import os
 import math
 import signal
+import re
 import sys
 from pathlib import Path
 
@@ -130,9 +131,25 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: A negative number with an exponent (argparse's own test takes only -1 and -0.5 for numbers).
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+
+def _negative_values(argv: list[str]) -> list[str]:
+    """``--option -1e-10`` as ``--option=-1e-10``: argparse took '-1e-10' for an option and said 'expected one
+    argument' instead of the option's own one-line rule (acceptance test)."""
+    out: list[str] = []
+    for token in argv:
+        if out and out[-1].startswith("--") and "=" not in out[-1] and _NEGATIVE_NUMBER.match(token):
+            out[-1] = f"{out[-1]}={token}"
+        else:
+            out.append(token)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    argv = sys.argv[1:] if argv is None else argv
+    argv = _negative_values(sys.argv[1:] if argv is None else list(argv))
     if not argv:  # no command: the usage and the commands, then the one-line error
         parser.print_help(sys.stderr)
         print("heyroll: error: a command is required", file=sys.stderr)
