@@ -433,7 +433,10 @@ class _Run:
 
     def why_not_pressed(self, i: int, j: int) -> str:
         """'' where balls i and j can be pressed together (:meth:`press`), else why not (one clause)."""
-        cluster = bonds_module.cluster_of(self.bonds | set(self.new_bonds(i, j)), i)
+        return self._why_not_held(bonds_module.cluster_of(self.bonds | set(self.new_bonds(i, j)), i))
+
+    def _why_not_held(self, cluster: list) -> str:
+        """'' where a cluster of these bonds can be held (solved together), else why not (one clause)."""
         if len(cluster) > MAX_CLUSTER_BONDS:
             return f"their cluster would hold {len(cluster)} contacts (at most {MAX_CLUSTER_BONDS} are solved together)"
         if not bonds_module.independent(bonds_module.bond_matrix(*self._cluster_rows(cluster))):
@@ -451,18 +454,24 @@ class _Run:
         rest of the accumulation would dissipate. Then the cluster's contact forces hold it together
         (system._bond_terms) until one vanishes (the release event), an impact on a member ends its bonds, or a
         member needs more friction than the cloth gives."""
-        i, j = contact.i, contact.j
+        self.hold_with(self.new_bonds(contact.i, contact.j), (contact.i, contact.j), contact)
+
+    def hold_with(self, bonds: list, balls: tuple, contact: Contact | None) -> None:
+        """``bonds`` join the cluster of ``balls`` (whose modes change): the cluster put onto its contacts and
+        every normal relative speed of it removed (one row for ``contact``, law_flag SETTLED; none for None),
+        then a bond the new ones leave without force lets go."""
         before = list(self.state)
         energy_before = self.energy(before)
-        for bond in self.new_bonds(i, j):
+        for bond in bonds:
             self._bond(bond)
-        self.project_cluster(i)
-        self.hold_cluster(i)
-        for k in (i, j):
+        self.project_cluster(balls[0])
+        self.hold_cluster(balls[0])
+        for k in balls:
             self.onsets.pop(k, None)
-        self.switch_system((i, j))
-        self.record(contact, before, self.state, energy_before, self.energy(self.state), SETTLED)
-        self.let_bonds_go([], pressed=True)  # a bond the new one leaves without force lets go
+        self.switch_system(balls)
+        if contact is not None:
+            self.record(contact, before, self.state, energy_before, self.energy(self.state), SETTLED)
+        self.let_bonds_go([], pressed=True)
 
     def _bond(self, bond: tuple) -> None:
         self.bonds.add(bond)
@@ -1720,24 +1729,12 @@ class _Run:
         3e-4 s later, pressed, let the cushion go, settled, ... 7 rows each time (acceptance test). False where
         the cluster cannot hold it (:meth:`why_not_pressed`'s limits): it is let go of its bonds and rides."""
         bond = ("wall", k, wall)
-        cluster = bonds_module.cluster_of(self.bonds | {bond}, k)
-        if len(cluster) > MAX_CLUSTER_BONDS or \
-                not bonds_module.independent(bonds_module.bond_matrix(*self._cluster_rows(cluster))):
+        if self._why_not_held(bonds_module.cluster_of(self.bonds | {bond}, k)):
             return False
-        before = list(self.state)
-        energy_before = self.energy(before)
         self.ride_wall[k], self.riding[k] = wall, True
-        self._bond(bond)
-        self.project_cluster(k)
-        self.hold_cluster(k)
-        self.onsets.pop(k, None)
-        self.switch_system((k,))
-        if record:
-            s = STATE_PER_BALL * k
-            _, normal = self.geometry.wall(k, wall, self.state[s], self.state[s + 1])
-            self.record(Contact("wall", k, wall, normal, self.zero), before, self.state, energy_before,
-                        self.energy(self.state), SETTLED)
-        self.let_bonds_go([], pressed=True)  # a bond the new one leaves without force lets go
+        s = STATE_PER_BALL * k
+        _, normal = self.geometry.wall(k, wall, self.state[s], self.state[s + 1])
+        self.hold_with([bond], (k,), Contact("wall", k, wall, normal, self.zero) if record else None)
         return True
 
     def simultaneous(self, contacts: list) -> None:
