@@ -57,7 +57,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def console() -> int:
-    sys.stdout = _PipeSafe(sys.stdout)
+    # (a closed stdout, `heyroll run ... >&-`, is None here: its output goes nowhere, the run goes on)
+    sys.stdout = _PipeSafe(sys.stdout if sys.stdout is not None else open(os.devnull, "w"))
     code = main()
     try:
         signal.signal(signal.SIGINT, signal.SIG_IGN)

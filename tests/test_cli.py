@@ -332,3 +332,13 @@ def test_a_negative_number_with_an_exponent_gets_the_options_own_rule(value, tmp
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--tolerance" in err[0] and "expected one argument" not in err[0]
     assert not (tmp_path / "out").exists()
+
+
+def test_a_closed_stdout_leaves_the_run_whole(tmp_path):
+    """Review: with stdout closed (`heyroll run ... >&-`) sys.stdout is None: an AttributeError traceback and
+    nothing written. Its output now goes nowhere and the run completes."""
+    process = subprocess.run([sys.executable, "-m", "heyroll", "run", "--out", str(tmp_path), "--no-figures",
+                              "--t-end", "50", "--progress", "off"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                             close_fds=True, preexec_fn=lambda: __import__("os").close(1))
+    assert process.returncode == 0 and "Traceback" not in process.stderr.decode()
+    assert json.loads((tmp_path / "summary.json").read_text())["status"] == "completed"

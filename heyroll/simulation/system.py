@@ -526,6 +526,7 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
     G = [track.generalized_mass(b) for b in scene.bodies] if track.linear_gap else []
     W = [track.weight_moment(b, g) for b in scene.bodies] if track.linear_gap else []
     accelerations, terms = [], [None] * n
+    member_accelerations: dict = {}  # unit -> {member: its own q''} (a circle's cluster in a turning plane, forced)
     links, link_exprs, link_terms = [], [], []
     with workprec():
         if per_body:
@@ -568,10 +569,12 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
                     if scene.frame.rotating or scene.forcing is not None:
                         # (sum G_k) psi'' = sum G_k a_k, each member's a_k from its own terms at psi + o (the
                         # centrifugal force, the forcing): the fixed plane's -W sin alone moved a cluster in a
-                        # turning hoop as if it did not turn (acceptance test: its Jacobi integral drifted)
-                        acc = hy.sum([par(G[k] / total) * body_terms(k, psi[u] + par(o), dpsi[u],
-                                                                    variable=psi[u]).acceleration
-                                      for k, o in zip(unit.members, unit.offsets)])
+                        # turning hoop as if it did not turn (acceptance test: its Jacobi integral drifted);
+                        # its contact forces (the links below) take the same G_k a_k
+                        own = member_accelerations[u] = {
+                            k: body_terms(k, psi[u] + par(o), dpsi[u], variable=psi[u]).acceleration
+                            for k, o in zip(unit.members, unit.offsets)}
+                        acc = hy.sum([par(G[k] / total) * own[k] for k in unit.members])
                     else:
                         acc = hy.sum([
                             -par(W[k] / total) * hy.sin(psi[u] + par(o)) for k, o in zip(unit.members, unit.offsets)
@@ -683,7 +686,9 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
         with workprec():
             slack = SPLIT_ULPS * precision.epsilon * mpmath.fsum(W[k] for k in unit.members)
         for m, (k, o) in enumerate(zip(unit.members[:-1], unit.offsets[:-1])):
-            partial.append(-par(W[k]) * hy.sin(psi[u] + par(o)) - par(G[k]) * accelerations[u])
+            own = par(G[k]) * member_accelerations[u][k] if u in member_accelerations else \
+                -par(W[k]) * hy.sin(psi[u] + par(o))  # member k's generalized force Q_k = G_k a_k
+            partial.append(own - par(G[k]) * accelerations[u])
             if k in member_friction:
                 partial.append(member_friction[k])
             links.append(ContactLink(unit=u, position=m, pair_index=scene_pair_index(scene, k, unit.members[m + 1])))

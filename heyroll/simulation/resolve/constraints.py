@@ -97,7 +97,9 @@ def cluster_impact(system, s, pars, contact, grad, closing, restitution, slippin
             grads.append(tuple(grad))
             rhs.append(-(1 + restitution) * closing)
             continue
-        number = next(m for m, link in enumerate(system.links) if link_bodies(system, link) == (x, y))
+        number = next((m for m, link in enumerate(system.links) if link_bodies(system, link) == (x, y)), None)
+        if number is None:  # the units do not meet end to end here (no link between x and y: StopIteration, review)
+            return None  # the caller releases the cluster: its contacts are resolved one by one
         grads.append(tuple(link_values[3 * number + 1: 3 * number + 3]))
         rhs.append(closing * 0)
     # Links inside a unit on a stop do not move (both inverse masses 0): leave them out.

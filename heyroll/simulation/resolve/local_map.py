@@ -217,9 +217,11 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
     stop = log.stop
     by_unit: dict[int, list[int]] = {}
     where = []  # each contact's two places in the state
+    domains = []  # each contact's second body's track ends (None: none)
     for number, c in enumerate(system.contacts):
         a, b = system.state_index(c.pair.i), system.state_index(c.pair.j)
         where.append((a, b))
+        domains.append(scene.domain(c.pair.j))
         by_unit.setdefault(a, []).append(number)
         by_unit.setdefault(b, []).append(number)
     max_rounds = 64 * system.n_bodies
@@ -289,7 +291,15 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
             scale = 1 + abs(float(s[a])) + abs(float(s[b]))
             target = OPEN_ULPS * eps * scale
             if abs(float(gap)) <= target and float(gj) > 0:
-                s[b] = s[b] + (2 * target - gap) / gj
+                moved = s[b] + (2 * target - gap) / gj
+                end = domains[number]
+                if end is not None and float(gi) < 0 and float(moved) >= end[1] - target:
+                    # the second body sits at the track's upper stop (it has just rebounded there): the first
+                    # one steps back instead (moved past the stop, its bound event never fired and it ran off
+                    # the track: review)
+                    s[a] = s[a] + (2 * target - gap) / gi
+                else:
+                    s[b] = moved
         return True
 
     return settle
