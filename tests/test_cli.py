@@ -342,3 +342,15 @@ def test_a_closed_stdout_leaves_the_run_whole(tmp_path):
                              close_fds=True, preexec_fn=lambda: __import__("os").close(1))
     assert process.returncode == 0 and "Traceback" not in process.stderr.decode()
     assert json.loads((tmp_path / "summary.json").read_text())["status"] == "completed"
+
+
+def test_validate_writes_its_report_where_the_lyapunov_reference_leaves_a_one_sided_track(tmp_path):
+    """Acceptance test: on a one-sided circle the Lyapunov estimate's reference run stops where the body would
+    leave the track: a RuntimeError traceback, no report.md. The report now says why there is no estimate."""
+    scene = tmp_path / "one_sided.toml"
+    scene.write_text('[track]\ntype = "circle"\nradius = 1.0\nsides = "one"\n[[bodies]]\nshape = "disk"\n'
+                     'radius = 0.1\nmass = 1.0\nphi = 0.0\ndphi = 4.5\n[collision]\nlaw = "hedrih"\nrestitution = 0.9\n'
+                     '[run]\nt_end = 5\n')
+    assert main(["validate", str(scene), "--out", str(tmp_path / "val"), "--collisions", "3"]) == 0
+    report = (tmp_path / "val" / "report.md").read_text()
+    assert "largest Lyapunov exponent: not estimated (the reference trajectory failed" in report

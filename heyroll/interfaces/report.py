@@ -395,9 +395,17 @@ def section_horizon(ctx: ReportContext) -> list[str]:
         ctx, "predictability horizon", predictability_horizon, ctx.scene, n_max=400, threshold=1e-10, t_end=1e5
     )
     horizon_figure(horizon, ctx.out_dir / "horizon.png")
-    lyap = _timed(ctx, "Lyapunov estimate", lyapunov_estimate, ctx.scene, t_end=200.0)
-    lyapunov_figure(lyap, ctx.out_dir / "lyapunov.png")
-    ctx.figures += ["horizon.png", "lyapunov.png"]
+    ctx.figures.append("horizon.png")
+    try:
+        lyap = _timed(ctx, "Lyapunov estimate", lyapunov_estimate, ctx.scene, t_end=200.0)
+    except RuntimeError as exc:  # its reference run stops (a body leaves a one-sided track): a traceback, no report
+        lyap = None
+        lyap_line = f"- largest Lyapunov exponent: not estimated ({exc})"
+    else:
+        lyapunov_figure(lyap, ctx.out_dir / "lyapunov.png")
+        ctx.figures.append("lyapunov.png")
+        lyap_line = (f"- largest Lyapunov exponent: {lyap.exponent:.3g} 1/s (e-folding time {lyap.e_folding_time:.3g} s); "
+                     f"{lyap.message}")
     first = horizon.first_disagreement
     return [
         "## Predictability horizon: where double results stop being trustworthy",
@@ -405,13 +413,11 @@ def section_horizon(ctx: ReportContext) -> list[str]:
         f"A double run against a quad run of the same scene (threshold 1e-10 relative in t): {horizon.message}",
         "",
         f"- collisions agreeing: {horizon.n_agree}" + (f"; first disagreement at collision {first}" if first else " (all checked)"),
-        f"- largest Lyapunov exponent: {lyap.exponent:.3g} 1/s (e-folding time {lyap.e_folding_time:.3g} s); {lyap.message}",
+        lyap_line,
         "",
         "![horizon](horizon.png)",
         "",
-        "![lyapunov](lyapunov.png)",
-        "",
-    ]
+    ] + (["![lyapunov](lyapunov.png)", ""] if lyap is not None else [])
 
 
 #: Sections from heyroll.analysis (series error, paper method, horizon, Lyapunov).
