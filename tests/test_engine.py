@@ -243,3 +243,24 @@ def test_bodies_placed_touching_in_doubles_on_a_circle_are_accepted_and_a_real_o
     with pytest.raises(SceneError, match=r"bodies\[3\]\.phi") as error:
         parse_scene(text(p2 - 1e-10))
     assert f"beta = {digits} rad" in str(error.value) and len(digits) == 19
+
+
+def test_angles_beyond_pi_give_the_run_of_the_same_places_written_within_it():
+    """Acceptance test: body 2 at phi = 5.0 (the same place as -1.283, listed counter-clockwise after body 1 at
+    -0.5): their contact, the pair 'across the top', was judged out of reach by an energy bound that holds for
+    angles in [-pi, pi]; it happened low on the circle, unwatched, and the run ended overlap."""
+    import math
+
+    from heyroll.interfaces.scene_file import parse_scene
+
+    def text(first, second):
+        body = '[[bodies]]\nshape = "{}"\nradius = {}\nmass = {}\nphi = {!r}\ndphi = 0.0\n'
+        return ('[track]\ntype = "circle"\nradius = 1.0\n' + body.format(*first) + body.format(*second)
+                + '[collision]\nlaw = "hedrih"\nrestitution = 0.8\n')
+
+    disk, ring = ("disk", 0.1, 1.0, -0.5), ("ring", 0.15, 2.0, 5.0)
+    beyond = heyroll.simulate(parse_scene(text(disk, ring)), t_end=2.0)
+    within = heyroll.simulate(parse_scene(text(ring[:3] + (5.0 - 2 * math.pi,), disk)), t_end=2.0)
+    assert beyond.status is within.status is heyroll.Status.COMPLETED
+    assert beyond.n_collisions == within.n_collisions == 2
+    assert np.allclose(beyond.collision_table()["t"], within.collision_table()["t"], rtol=1e-14, atol=0)

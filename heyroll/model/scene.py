@@ -408,7 +408,10 @@ class Scene:
                     f"bodies {i + 1} and {j + 1} overlap at start (gap {mpmath.nstr(gap, 6)} rad < 0): list bodies "
                     f"counter-clockwise with neighbours at least beta = {mpmath.nstr(beta, 17)} rad apart",
                 )
-            reachable = least_energy is None or energy >= least_energy
+            # (the bound across the top holds for angles in [-pi, pi]: with phi = 5.0 that pair touched low on the
+            # circle, unwatched, and the run ended overlap: acceptance test)
+            across_the_top = j != 0 or all(-mpmath.pi <= p <= mpmath.pi for p in self.phi)
+            reachable = least_energy is None or energy >= least_energy or not across_the_top
             pairs.append(ContactPair(i=i, j=j, beta=beta, offset=offset, law_map=law_map, reachable=reachable))
         return ScenePairs(pairs, constants=constants)
 
