@@ -245,10 +245,10 @@ def section_energy(ctx: ReportContext) -> list[str]:
     nb = result.n_bodies
     head = " | ".join(f"E{k + 1} before | E{k + 1} after" for k in range(nb))
     scene = result.scene
-    if scene.rough or scene.forcing is not None:  # (the text said energy was kept on a rough track: review)
+    working = [name for name, on in (("friction", scene.rough), ("the forcing", scene.forcing is not None)) if on]
+    if working:  # (the text said energy was kept on a rough track: review)
         between = ("Between collisions each body's mechanical energy changes by the work of "
-                   + ("friction" if scene.forcing is None else "friction and the forcing" if scene.rough
-                      else "the forcing") + "; at a collision")
+                   f"{' and '.join(working)}; at a collision")
     else:
         between = "Between collisions each body keeps its own mechanical energy (eq. 26); at a collision"
     lines = [

@@ -18,7 +18,7 @@ import mpmath
 import numpy as np
 
 from ..errors import SceneError
-from ._numbers import Real, exact_state, from_exact_state, is_finite, to_mpf, workprec
+from ._numbers import Real, exact_state, from_exact_state, is_finite, to_mpf, touching_slack, workprec
 from .bodies import Body
 from .forcing import Forcing
 from .frame import STATIONARY, Frame
@@ -398,10 +398,7 @@ class Scene:
         for (i, j), (beta, offset, law_map, least_energy) in zip(neighbours, constants):
             with workprec():
                 gap = self.phi[j] + offset - self.phi[i] - beta
-                # touching passes to the round-off of angles written as doubles: phi_i + beta rounded to 17
-                # digits came out 1e-17 rad short and a touching row (a cradle) was refused (acceptance test);
-                # the run's start settles such contacts
-                slack = mpmath.mpf(2) ** -48 * max(1, abs(self.phi[i]), abs(self.phi[j] + offset))
+                slack = touching_slack(self.phi[i], self.phi[j] + offset)
             if gap < -slack:
                 raise SceneError(
                     f"bodies[{j + 1}].phi",

@@ -690,8 +690,6 @@ def _double_double(x) -> tuple[float, float]:
     return hi, float(mpmath.mpf(x) - hi)
 
 
-
-
 def _double_double_map(q, a_i, a_j):
     """``apply(vi, vj)``: the map with double-double constants, each product exact
     (Dekker's two-product) and each sum with its error (Knuth's two-sum), rounded

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import mpmath
 
 from ...errors import SceneError
-from .._numbers import Real, is_finite, to_mpf, workprec
+from .._numbers import Real, is_finite, to_mpf, touching_slack, workprec
 from ..bodies import Body
 from ..scene import STANDARD_GRAVITY, RunSettings
 from .boundaries import Boundary
@@ -120,10 +120,7 @@ class TableScene:
                 for j in range(i + 1, len(self.balls)):
                     a, b = self.balls[i], self.balls[j]
                     reach = a.body.radius + b.body.radius
-                    # balls touching pass, to the round-off of places written as doubles: a triangular rack has
-                    # irrational places, and written to 17 digits (or 30) its touching balls came out 1e-17 closer
-                    # than touching and were refused (acceptance test); the run opens such contacts past round-off
-                    slack = mpmath.mpf(2) ** -48 * max(1, abs(a.x), abs(a.y), abs(b.x), abs(b.y))  # ~16 ulps
+                    slack = touching_slack(a.x, a.y, b.x, b.y)
                     if (a.x - b.x) ** 2 + (a.y - b.y) ** 2 < (reach - slack) ** 2:
                         raise SceneError(f"bodies[{j + 1}].x", f"ball {j + 1} overlaps ball {i + 1} (centres closer "
                                                                f"than the sum of the radii)")
