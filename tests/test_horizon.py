@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,6 +11,8 @@ import pytest
 import heyroll
 from heyroll.analysis.horizon import lyapunov_estimate, predictability_horizon
 from heyroll.interfaces.validation_figures import horizon_figure, lyapunov_figure
+
+ROOT = Path(__file__).resolve().parents[1]
 
 #: Two equal solid balls, elastic rolling law: equal J_P and equal (R - r)/r, so every
 #: collision exchanges the rates and the motion is that of two free pendulums (integrable).
@@ -115,3 +118,58 @@ def test_figures(tmp_path):
     assert names == ["horizon.png", "lyapunov.png", "lyapunov1.png"]
     for name in names:
         assert (tmp_path / name).read_bytes()[:4] == b"\x89PNG"
+
+
+#: A forced ball and a ring in a circle (a smooth track: the Lyapunov estimate applies).
+FORCED_CIRCLE = """
+name = "forced-circle"
+[track]
+type = "circle"
+radius = 1.0
+[[bodies]]
+shape = "solid_sphere"
+radius = 0.1
+mass = 1.0
+phi = -0.7
+dphi = 0.3
+[[bodies]]
+shape = "ring"
+radius = 0.15
+mass = 2.0
+phi = 0.6
+dphi = 0.0
+[forcing]
+kind = "force"
+amplitude = 3.0
+frequency = 2.7
+phase = 0.4
+"""
+
+
+@pytest.mark.parametrize("text", [FORCED_CIRCLE, None], ids=["forced circle", "turning curve"])
+def test_segments_restarted_with_the_elapsed_time_continue_the_run(text):
+    """Benettin's segments rebuild the scene from the state: a forcing's clock restarts with its phase
+    advanced by the elapsed time, a turning plane and the track carry over, so three segments end
+    where one run of their total length ends."""
+    from heyroll.analysis.horizon import _scene_at
+    from heyroll.interfaces.scene_file import load_scene
+
+    scene = heyroll.parse_scene(text) if text else load_scene(ROOT / "examples" / "rotating_curve.toml")
+    whole = heyroll.simulate(scene, t_end=3.0)
+    state, elapsed = np.concatenate([np.asarray(scene.q, float), np.asarray(scene.dq, float)]), 0.0
+    for tau in (1.1, 0.8, 1.1):
+        part = heyroll.simulate(_scene_at(scene, state, tau, elapsed), t_end=tau)
+        state, elapsed = part.final_state, elapsed + tau
+    assert whole.status.name == "COMPLETED" and elapsed == 3.0
+    assert np.allclose(state, whole.final_state, rtol=0, atol=1e-10)
+
+
+def test_lyapunov_on_a_path_track_in_a_turning_plane_is_estimated_and_regular():
+    """One body on a turning curve (one degree of freedom, autonomous in the turning plane): a zero
+    exponent, whose estimate decays like log(t)/t."""
+    from heyroll.interfaces.scene_file import load_scene
+
+    scene = load_scene(ROOT / "examples" / "rotating_curve.toml")
+    short, long = lyapunov_estimate(scene, t_end=40.0), lyapunov_estimate(scene, t_end=160.0)
+    assert 0 < long.exponent < short.exponent and long.exponent < 2 * long.regular_level
+    assert not long.chaotic and long.interval == pytest.approx(2 * math.pi / 3.0 / 4)  # a quarter turn

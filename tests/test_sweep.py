@@ -17,7 +17,7 @@ pytest.importorskip("zarr")
 
 import heyroll
 from heyroll.interfaces.cli import main
-from heyroll.interfaces.scene_file import default_scene_text
+from heyroll.interfaces.scene_file import default_scene_text, load_scene
 from heyroll.sweep import SweepError, SweepKeyError, SweepStoreError, open_sweep, run_sweep
 from heyroll.sweep import run as sweep_run
 from heyroll.sweep.plan import make_plan
@@ -434,7 +434,13 @@ def test_lyapunov_estimate_per_point_with_its_error_and_nan_with_a_reason(tmp_pa
     forced = run_sweep(ROOT / "examples" / "rough_parabola_forced.toml", values={"forcing.amplitude": [2.0]},
                        keep="lyapunov,rotation", t_end=2.0, workers=1, out=tmp_path / "forced")
     assert np.isnan(forced["lyapunov"]).all() and np.isnan(forced["rotation"]).all()
-    assert "circle scenes only" in str(forced["lyapunov_message"].values[0])
+    assert "slip state" in str(forced["lyapunov_message"].values[0])
+    # A smooth curve in a turning plane: estimated like a circle scene (the same function, the same number).
+    turning = run_sweep(ROOT / "examples" / "rotating_curve.toml", values={"frame.omega": [2.0, 3.0]},
+                        keep="lyapunov", t_end=5.0, workers=1, out=tmp_path / "turning")
+    alone = lyapunov_estimate(load_scene(ROOT / "examples" / "rotating_curve.toml"), t_end=5.0)
+    assert float(turning["lyapunov"].sel({"frame.omega": 3.0})) == alone.exponent
+    assert np.isfinite(turning["lyapunov_error"]).all()
 
 
 def test_strobe_samples_of_a_forced_scene_and_the_poincare_figure(tmp_path, capsys):
@@ -564,3 +570,22 @@ def test_a_rough_track_sweep_keeps_its_last_impacts_and_period(tmp_path):
         kept = [t for t in point["impact_t"].values.tolist() if t == t]  # (NaN after a run's last impact)
         assert kept == result.collision_table()["t"][-3:].tolist() and kept
         assert "period" in ds
+
+
+def test_keep_repeated_is_one_list_and_points_without_strobe_samples_are_refused(tmp_path, capsys):
+    """`--keep a --keep b` is `--keep a,b` (argparse would keep the last); `plot --points` on a store without
+    stroboscopic samples is refused in one line, before any figure is drawn."""
+    out = tmp_path / "s"
+    assert main(["sweep", "--values", "collision.restitution=0.9,1.0", "--keep", "impacts:3", "--keep", "period",
+                 "--max-collisions", "20", "--workers", "1", "--out", str(out), "--progress", "off",
+                 "--no-figures"]) == 0
+    ds = open_sweep(out / "sweep.zarr")
+    assert "period" in ds.data_vars and ds.sizes["impact"] == 3
+    capsys.readouterr()
+    assert main(["plot", str(out / "sweep.zarr"), "--out", str(tmp_path / "f"), "--points", "0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--points" in err and "strobe:M" in err
+    assert not (tmp_path / "f").exists() or not any((tmp_path / "f").iterdir())
+    assert main(["run", "--max-collisions", "1", "--no-figures", "--out", str(tmp_path / "r"),
+                 "--progress", "off"]) == 0
+    assert "1 collision, 0 limiter impacts, 0 junction passages" in capsys.readouterr().out

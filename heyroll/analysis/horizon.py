@@ -13,6 +13,7 @@ Both use only :func:`heyroll.simulate` and :meth:`heyroll.Scene.make`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -188,9 +189,6 @@ class LyapunovEstimate:
 
 
 #: Scene.make keyword -> Scene attribute, for the settings a rebuilt scene must keep.
-_CARRIED_SETTINGS = {"friction": "track_friction", "on_inconsistent": "on_inconsistent", "track_sides": "track_sides"}
-
-
 def _same_contact_at_end(rx, ry) -> bool:
     """Both segments end with the same bodies in persistent contact (k < 1: their impacts accumulated, in
     numbers that a perturbation changes, into one contact): the segment ends in one mode, comparable."""
@@ -198,28 +196,63 @@ def _same_contact_at_end(rx, ry) -> bool:
     return bool(ends[0]) and ends[0] == ends[1]
 
 
-def _scene_at(scene: Scene, state, t_end) -> Scene:
-    """``scene`` with a new initial state (pairs recomputed by Scene.make); other settings carried over."""
-    import inspect
-
+def _scene_at(scene: Scene, state, t_end, elapsed=0) -> Scene:
+    """``scene`` with a new initial state (pairs recomputed by Scene.make), restarted ``elapsed`` seconds
+    into the run: a forcing's phase advances by frequency * elapsed (its clock starts again at 0); every
+    other setting (friction, sides, frame, limiters) is carried over."""
     nb = len(scene.bodies)
-    accepted = inspect.signature(Scene.make).parameters
-    extra = {
-        keyword: getattr(scene, attribute)
-        for keyword, attribute in _CARRIED_SETTINGS.items()
-        if keyword in accepted and getattr(scene, attribute, None) is not None
-    }
+    forcing = scene.forcing
+    if forcing is not None and elapsed:
+        forcing = dataclasses.replace(forcing, phase=mpmath.fmod(forcing.phase + forcing.frequency * _to_mpf(elapsed),
+                                                                  2 * mpmath.pi))
     return Scene.make(
         track=scene.track,
         bodies=scene.bodies,
-        phi=list(state[:nb]),
-        dphi=list(state[nb:]),
+        q=list(state[:nb]),
+        dq=list(state[nb:2 * nb]),
         law=scene.law,
         g=scene.g,
         run=RunSettings.make(t_end=t_end),
         name=scene.name,
-        **extra,
+        friction=scene.track_friction,
+        on_inconsistent=scene.on_inconsistent,
+        track_sides=scene.track_sides,
+        frame=scene.frame,
+        limiter_restitution=scene.limiter_restitution,
+        static_friction=scene.static_friction,
+        forcing=forcing,
     )
+
+
+def _scales(scene: Scene) -> tuple[list, float]:
+    """The metric's weights (one per coordinate, then one per rate) and the default renormalisation
+    interval. On a circle a_k = g/(kappa_k (R - r_k)): weights 1 and 1/a_k, the interval half the
+    shortest small-oscillation period pi/sqrt(a). On a path track each body's coordinate is scaled by the
+    width w of its domain and its rate by w/tau, with tau = sqrt(l/g) and l the extent of the track's
+    centre line (the pendulum time of the track's size); the interval is (pi/2) tau. A turning plane's
+    or a forcing's own period caps the interval at a quarter of it. (The exponent does not depend on
+    the metric; the interval only has to keep d0 e^(lambda interval) small.)"""
+    nb = len(scene.bodies)
+    if scene.track.kind == "circle":
+        a = [_to_mpf(scene.track.angular_stiffness(b, scene.g)) for b in scene.bodies]
+        weights = [mpmath.mpf(1)] * nb + [1 / ak for ak in a]
+        interval = float(mpmath.pi / mpmath.sqrt(max(a)))
+    else:
+        widths, extent = [], 0.0
+        for body in scene.bodies:
+            lo, hi = (float(v) for v in scene.track.domain(body))
+            x, y = scene.track.centre(body, np.linspace(lo, hi, 257))
+            extent = max(extent, float(np.ptp(x)), float(np.ptp(y)))
+            widths.append(mpmath.mpf(hi - lo))
+        tau = mpmath.sqrt(mpmath.mpf(max(extent, 1e-300)) / scene.g)
+        weights = [1 / (w * w) for w in widths] + [tau * tau / (w * w) for w in widths]
+        interval = float(mpmath.pi / 2 * tau)
+    periods = []
+    if scene.frame.rotating:
+        periods.append(float(2 * mpmath.pi / abs(scene.frame.omega)))
+    if scene.forcing is not None:
+        periods.append(scene.forcing.period)
+    return weights, min([interval, *(p / 4 for p in periods)])
 
 
 def lyapunov_estimate(
@@ -240,9 +273,15 @@ def lyapunov_estimate(
     current states, rebuilt as scenes with :meth:`Scene.make`; the
     separation d = |y - x| is measured at the *same* time, log(d/d0)
     accumulated and y reset to x + d0 (y - x)/d. The exponent is the
-    accumulated log over the elapsed time. Distances use the scaled metric
-    sum_k (dphi_k^2 + (dphi'_k)^2 / a_k), a_k = g/(kappa_k (R - r_k)), so
-    angles and rates weigh alike (the exponent does not depend on it).
+    accumulated log over the elapsed time. Distances use a scaled metric
+    (``_scales``): on a circle sum_k (dphi_k^2 + (dphi'_k)^2 / a_k),
+    a_k = g/(kappa_k (R - r_k)), so angles and rates weigh alike; on a path
+    track the coordinates in units of their domain's width and the rates in
+    those widths per pendulum time of the track's size (the exponent does not
+    depend on the metric). Any track, in a fixed or a turning plane, with or
+    without forcing (each segment restarts the forcing's clock with its phase
+    advanced by the elapsed time); not on rough tracks (their slip state is
+    not rebuilt: NotImplementedError).
 
     Why this rather than the divergence of double and quad collision
     sequences: that divergence is seeded by rounding at every step, not
@@ -269,21 +308,20 @@ def lyapunov_estimate(
         raise ValueError("t_end must be > 0")
     if not 0 < d0 < 1e-3:
         raise ValueError("d0 must be in (0, 1e-3)")
+    if scene.rough:
+        raise NotImplementedError("lyapunov_estimate rebuilds scenes from their coordinates and rates, not their "
+                                  "slip state: not estimated on a rough track")
     nb = len(scene.bodies)
     with mpmath.workdps(40):
-        a = [_to_mpf(scene.track.angular_stiffness(b, scene.g)) for b in scene.bodies]
-        weights = [mpmath.mpf(1)] * nb + [1 / ak for ak in a]
-        if interval is None:
-            # Half the shortest small-oscillation period 2 pi / sqrt(a).
-            interval = float(mpmath.pi / mpmath.sqrt(max(a)))
-        interval = float(interval)
+        weights, default_interval = _scales(scene)
+        interval = float(default_interval if interval is None else interval)
         if not interval > 0:
             raise ValueError("interval must be > 0")
 
         def norm(delta):
             return mpmath.sqrt(mpmath.fsum(w * d * d for w, d in zip(weights, delta)))
 
-        x = [mpmath.mpf(p) for p in scene.phi] + [mpmath.mpf(v) for v in scene.dphi]
+        x = [mpmath.mpf(p) for p in scene.q] + [mpmath.mpf(v) for v in scene.dq]
         rng = np.random.default_rng(seed)
         direction = [mpmath.mpf(float(c)) for c in rng.standard_normal(2 * nb)]
         n0 = norm(direction)
@@ -298,8 +336,10 @@ def lyapunov_estimate(
             tau = min(interval, t_end - elapsed)
             for attempt in range(max_retries + 1):
                 try:
-                    rx = heyroll.simulate(_scene_at(scene, x, tau), t_end=tau, max_collisions=None, precision=precision)
-                    ry = heyroll.simulate(_scene_at(scene, y, tau), t_end=tau, max_collisions=None, precision=precision)
+                    rx = heyroll.simulate(_scene_at(scene, x, tau, elapsed), t_end=tau, max_collisions=None,
+                                          precision=precision)
+                    ry = heyroll.simulate(_scene_at(scene, y, tau, elapsed), t_end=tau, max_collisions=None,
+                                          precision=precision)
                 except ValueError:  # a state rebuilt at (a rounding inside) contact: move the segment end
                     rx = ry = None
                 if rx is not None and rx.success and ry.success and (
@@ -317,7 +357,7 @@ def lyapunov_estimate(
                     f"after {max_retries} retries"
                 )
             if len(rx.final_state) != 2 * nb:
-                raise NotImplementedError("lyapunov_estimate handles states [phi_1..phi_N, dphi_1..dphi_N] only")
+                raise NotImplementedError("lyapunov_estimate handles states [q_1..q_N, dq_1..dq_N] only")
             x1 = [_to_mpf(v) for v in rx.final_state]
             y1 = [_to_mpf(v) for v in ry.final_state]
             elapsed += tau

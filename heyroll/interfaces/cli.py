@@ -232,20 +232,25 @@ def _run(args) -> int:
     for warning in result.settings.get("warnings", []):
         print(f"warning: {warning}")
     if is_table(result):
-        print(f"{result.n_collisions} impacts ({result.n_cushion} on the cushion), t_final = "
+        print(f"{_counted(result.n_collisions, 'impact')} ({result.n_cushion} on the cushion), t_final = "
               f"{float(result.t_final):.17g} s, energy {result.energy_initial:.17g} -> {result.energy_final:.17g} J, "
               f"{result.wall_time_s:.3g} s wall ({rate:.3g} impacts/s incl. set-up)")
         print(f"wrote {out}/")
         return result.status.exit_code
     passages = result.summary()
     print(
-        f"{result.n_collisions} collisions, {passages['limiter_impacts']} limiter impacts, "
-        f"{passages['junction_passages']} junction passages, t_final = {float(result.t_final):.17g} s, "
+        f"{_counted(result.n_collisions, 'collision')}, {_counted(passages['limiter_impacts'], 'limiter impact')}, "
+        f"{_counted(passages['junction_passages'], 'junction passage')}, t_final = {float(result.t_final):.17g} s, "
         f"energy {result.energy_initial:.17g} -> {result.energy_final:.17g} J, "
         f"{result.wall_time_s:.3g} s wall ({rate:.3g} collisions/s incl. set-up)"
     )
     print(f"wrote {out}/")
     return result.status.exit_code
+
+
+def _counted(n: int, noun: str) -> str:
+    """'1 collision', '2 collisions': the report's counts in English."""
+    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 @contextlib.contextmanager
@@ -290,7 +295,7 @@ def _progress_bar(mode: str, scene, t_end):
 
     def progress(t, collisions):
         bar.n = min(t, total)
-        bar.set_postfix_str(f"{collisions} collisions", refresh=False)
+        bar.set_postfix_str(_counted(collisions, "collision"), refresh=False)
         bar.refresh()
 
     try:
@@ -515,7 +520,8 @@ def _add_sweep_parsers(sub) -> None:
                        help="random points, uniform in [LO, HI) for each KEY (with --samples, --seed)")
     sweep.add_argument("--samples", help="number of random points")
     sweep.add_argument("--seed", help="seed of the random points (default 0)")
-    sweep.add_argument("--keep", help="what each point keeps, a comma list: summary (default), impacts:M (the last "
+    sweep.add_argument("--keep", action="append", help="what each point keeps, a comma list (or --keep repeated): "
+                                                         "summary (default), impacts:M (the last "
                                       "M impacts), first:M, strobe:M (forced scenes: the last M stroboscopic "
                                       "samples), period, lyapunov, rotation (per-point estimates; see README)")
     sweep.add_argument("--precision", help="double (default), long, quad or mp:BITS for every point")
@@ -565,7 +571,7 @@ def _sweep(args, argv: list) -> int:
         raise BadInput("--workers", "a --scheduler's cluster has its own workers: give one or the other")
     out = _out_dir(args.out)
     plan = make_plan(args.scene, grid=args.grid, random=args.random, samples=args.samples, seed=args.seed,
-                     keep=args.keep, t_end=t_end, max_collisions=max_collisions, precision=args.precision,
+                     keep=None if args.keep is None else ",".join(args.keep), t_end=t_end, max_collisions=max_collisions, precision=args.precision,
                      batch=args.batch)
     print(f"{plan.n_points} points: " + " x ".join(f"{d} ({n})" for d, n in zip(plan.dims, plan.shape))
           + (f" over {', '.join(k.text for k in plan.keys)}" if plan.sample is not None else ""))

@@ -63,6 +63,11 @@ def sweep_figures(store, out_dir, scalar: str | None = None, points=None) -> lis
 
     matplotlib.use("Agg")
     ds = open_sweep(store)
+    if points is not None and "strobe" not in ds.dims:  # refused, not ignored, before anything is drawn
+        raise SweepError("--points", "the Poincare section needs stroboscopic samples: run the sweep with "
+                                     "--keep strobe:M (forced scenes)")
+    if points is not None:
+        _check_points(points, ds["status"].size)
     offered = available_scalars(ds)
     if scalar is not None and scalar not in offered:
         raise SweepError("--scalar", f"must be one of {', '.join(offered)}, got {scalar!r}")
@@ -205,6 +210,14 @@ def _map(ds, keys: list, name: str, path: Path, title: str) -> Path:
     return _save(fig, path)
 
 
+def _check_points(points, total: int) -> list[int]:
+    chosen = [int(p) for p in points]
+    bad = [p for p in chosen if not 0 <= p < total]
+    if bad:
+        raise SweepError("--points", f"point numbers run from 0 to {total - 1}, got {bad}")
+    return chosen
+
+
 def poincare(ds, keys: list, path: Path, title: str, points=None) -> Path:
     """The stroboscopic Poincare section of chosen points: each body's (q, q') at the kept samples,
     one colour per point (a circle's phi wrapped to [-pi, pi))."""
@@ -221,10 +234,7 @@ def poincare(ds, keys: list, path: Path, title: str, points=None) -> Path:
                   np.linspace(0, len(with_samples) - 1, min(POINCARE_POINTS, len(with_samples)))] if with_samples else []
         chosen = list(dict.fromkeys(chosen))
     else:
-        chosen = [int(p) for p in points]
-        bad = [p for p in chosen if not 0 <= p < total]
-        if bad:
-            raise SweepError("points", f"point numbers run from 0 to {total - 1}, got {bad}")
+        chosen = _check_points(points, total)
     n = state.shape[2] // 2
     coordinate = ds.attrs.get("coordinate", "q")
     unit = COORDINATE_UNITS.get(coordinate, "")

@@ -363,13 +363,7 @@ def lyapunov(scene, result, precision: str) -> tuple:
 
     t = float(result.t_final)
     why = None
-    if scene.track.kind != "circle":
-        why = f"lyapunov_estimate handles circle scenes only (states phi, dphi), not a {scene.track.kind} track"
-    elif scene.forcing is not None:
-        why = "lyapunov_estimate rebuilds scenes without their forcing: not estimated for a forced scene"
-    elif scene.frame.rotating:
-        why = "lyapunov_estimate rebuilds scenes without their turning frame: not estimated in a turning plane"
-    elif scene.rough:
+    if scene.rough:
         why = "lyapunov_estimate rebuilds scenes without their slip state: not estimated on a rough track"
     elif not t > 0:
         why = "the run has no time to estimate over (t_final = 0)"

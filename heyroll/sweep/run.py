@@ -44,7 +44,7 @@ class SweepOutcome:
 
     def summary_line(self) -> str:
         counts = ", ".join(f"{n} {status}" for status, n in sorted(self.statuses.items(), key=lambda x: (-x[1], x[0])))
-        return f"{self.points} points: {counts}"
+        return f"{self.points} point{'' if self.points == 1 else 's'}: {counts}"
 
 
 def run_sweep(scene=None, *, scene_text=None, vary=None, values=None, random=None, samples=None, seed=None,
