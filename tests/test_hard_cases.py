@@ -410,6 +410,32 @@ def test_bodies_starting_touching_and_approaching_collide_at_t0():
     assert min_gap(result) >= GAP_FLOOR
 
 
+@pytest.mark.parametrize("precision", ["double", "long", "quad"])
+@pytest.mark.parametrize("track", ["circle", "curve"])
+def test_bodies_placed_past_touching_by_round_off_collide_at_t0_in_every_precision(track, precision):
+    """Places written to 17 digits land up to ~1e-17 past touching; the scene accepts that
+    (model.touching_slack). In long and quad such a gap is far beyond the settler's band: the run
+    used to miss the contact (status overlap at t_end); the start now moves the pair to touching
+    in the run's type and the approaching pair collides at t = 0, as in double."""
+    with mpmath.workdps(40):
+        if track == "circle":  # centres on a circle of radius 0.9 touch 2 asin(1/9) rad apart
+            place = mpmath.mpf("0.1") + 2 * mpmath.asin(mpmath.mpf(1) / 9) - mpmath.mpf("3e-17")
+            where = f'[track]\ntype = "circle"\nradius = 1.0\n'
+            coordinate = "phi"
+        else:  # on the line y = 0.1 x the contact points are 0.2 m apart along it
+            place = mpmath.mpf("0.1") + mpmath.mpf("0.2") / mpmath.sqrt(mpmath.mpf("1.01")) - mpmath.mpf("3e-17")
+            where = '[track]\ntype = "curve"\ny = "0.1*x"\nx_min = -1.0\nx_max = 1.0\n'
+            coordinate = "x"
+    text = where + "".join(
+        f'[[bodies]]\nshape = "disk"\nradius = 0.1\nmass = 1.0\n{coordinate} = {q}\nd{coordinate} = {v}\n'
+        for q, v in (("0.1", "0.5"), (mpmath.nstr(place, 17, min_fixed=-1, max_fixed=2), "0.0")))
+    result = heyroll.simulate(heyroll.parse_scene(text + "[run]\nt_end = 0.5\n"), precision=precision)
+    assert result.status is Status.COMPLETED, result.message
+    assert result.n_collisions >= 1 and float(result.times[0]) == 0.0
+    after = np.asarray(result.states_after[0], dtype=float)
+    assert after[2] == pytest.approx(0.0, abs=1e-12) and after[3] == pytest.approx(0.5, rel=1e-12)  # exchanged
+
+
 # -- near the separatrix ----------------------------------------------------------------------
 
 

@@ -21,6 +21,7 @@ from ..model.scene import Scene
 from ..model.table import is_table
 from ..simulation.driver import signal_handled, simulate
 from ..simulation.precision import Precision
+from ..simulation.result import counted
 from .scene_file import default_scene, default_scene_text, load_scene
 
 EXIT_OK, EXIT_RUN_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -232,25 +233,20 @@ def _run(args) -> int:
     for warning in result.settings.get("warnings", []):
         print(f"warning: {warning}")
     if is_table(result):
-        print(f"{_counted(result.n_collisions, 'impact')} ({result.n_cushion} on the cushion), t_final = "
+        print(f"{counted(result.n_collisions, 'impact')} ({result.n_cushion} on the cushion), t_final = "
               f"{float(result.t_final):.17g} s, energy {result.energy_initial:.17g} -> {result.energy_final:.17g} J, "
               f"{result.wall_time_s:.3g} s wall ({rate:.3g} impacts/s incl. set-up)")
         print(f"wrote {out}/")
         return result.status.exit_code
     passages = result.summary()
     print(
-        f"{_counted(result.n_collisions, 'collision')}, {_counted(passages['limiter_impacts'], 'limiter impact')}, "
-        f"{_counted(passages['junction_passages'], 'junction passage')}, t_final = {float(result.t_final):.17g} s, "
+        f"{counted(result.n_collisions, 'collision')}, {counted(passages['limiter_impacts'], 'limiter impact')}, "
+        f"{counted(passages['junction_passages'], 'junction passage')}, t_final = {float(result.t_final):.17g} s, "
         f"energy {result.energy_initial:.17g} -> {result.energy_final:.17g} J, "
         f"{result.wall_time_s:.3g} s wall ({rate:.3g} collisions/s incl. set-up)"
     )
     print(f"wrote {out}/")
     return result.status.exit_code
-
-
-def _counted(n: int, noun: str) -> str:
-    """'1 collision', '2 collisions': the report's counts in English."""
-    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 @contextlib.contextmanager
@@ -295,7 +291,7 @@ def _progress_bar(mode: str, scene, t_end):
 
     def progress(t, collisions):
         bar.n = min(t, total)
-        bar.set_postfix_str(_counted(collisions, "collision"), refresh=False)
+        bar.set_postfix_str(counted(collisions, "collision"), refresh=False)
         bar.refresh()
 
     try:

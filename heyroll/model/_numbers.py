@@ -145,9 +145,13 @@ def two_product(a: float, b: float) -> tuple[float, float]:
     return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
 
 
+#: touching_slack relative to the coordinates' size (16 double ulps).
+TOUCHING_SLACK = 2.0 ** -48
+
+
 def touching_slack(*coordinates) -> mpmath.mpf:
     """How far past touching two bodies placed by these coordinates may start (model precision): ~16 ulps of the
     largest, the round-off of places written as doubles (a cradle's angles, a rack's irrational places written to
-    17 digits came out 1e-17 past touching and were refused: acceptance tests). The run's start settles such
-    contacts."""
-    return mpmath.mpf(2) ** -48 * max([1] + [abs(c) for c in coordinates])
+    17 digits came out 1e-17 past touching and were refused: acceptance tests). The run's start moves such
+    contacts to touching in the run's own number type (the settlers' close_start) and settles them."""
+    return mpmath.mpf(TOUCHING_SLACK) * max([1] + [abs(c) for c in coordinates])

@@ -375,7 +375,8 @@ class Scene:
                 raise SceneError(f"bodies[{j + 1}].{c}",
                                  "bodies must be listed in order along the track (increasing coordinate)")
             gap = float(self.gap(i, j, float(self.q[i]), float(self.q[j])))
-            if gap < 0:
+            # (places written to 17 digits come out ~1e-17 m past touching: the circle's and the table's slack)
+            if gap < -float(touching_slack(*self.centre(i, float(self.q[i])), *self.centre(j, float(self.q[j])))):
                 raise SceneError(f"bodies[{j + 1}].{c}", f"body {j + 1} overlaps body {i + 1} (gap {gap:.3g} m)")
             law_map = None
             if pairs_of is not None:

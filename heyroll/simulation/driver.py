@@ -32,7 +32,7 @@ from .events import CollisionLog, StopRequest, fill_record_modes, mode_events, m
 from .resolve.friction import FrictionState, initial_modes
 from .compiled_cache import CompiledCache, by_constants, by_scene
 from .precision import Precision
-from .result import SimulationResult, Status, passage_table
+from .result import SimulationResult, Status, counted, passage_table
 from .contact_function import BODY_VALUES, body_function, evaluate
 from .resolve.bounds import parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
@@ -330,6 +330,8 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             holder[0], holder[1] = ta.state, np.array(params)
             stream.ta = ta
             _reset(log.stop)
+            if not later_mode and getattr(settle, "close_start", None) is not None:
+                settle.close_start(ta.state)  # (bodies placed past touching by round-off: model.touching_slack)
             # Pairs touching as the mode starts (bodies that start so, the rest of a
             # cascade, a contact that has just split): collide, enter contact, or
             # open by a few ulps so that their events can see them close again.
@@ -426,7 +428,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             # Ctrl-C (or SIGTERM) outside the integration itself: while a mode compiles, between
             # modes. The run ends there, with everything recorded so far (as in _propagate).
             log.stop.reason = "interrupted"
-            log.stop.message = (f"interrupted at t = {float(t[0]):.17g} s after {log.count} collisions "
+            log.stop.message = (f"interrupted at t = {float(t[0]):.17g} s after {counted(log.count, 'collision')} "
                                 "(between two stretches of integration)")
             break
 
@@ -541,7 +543,7 @@ def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None):
     except KeyboardInterrupt:
         # Ctrl-C (or SIGTERM turned into it by the CLI): keep every completed collision.
         log.stop.reason = "interrupted"
-        log.stop.message = f"interrupted at t = {float(ta.time):.17g} s after {log.count} collisions"
+        log.stop.message = f"interrupted at t = {float(ta.time):.17g} s after {counted(log.count, 'collision')}"
         return None, steps, ta
     finally:
         if gc_was_enabled:
@@ -925,7 +927,7 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
     if reason == "failed":
         return Status.FAILED, log.stop.message
     if outcome == hy.taylor_outcome.time_limit:
-        return Status.COMPLETED, f"reached t_end = {float(t_end)!r} s after {log.count} collisions"
+        return Status.COMPLETED, f"reached t_end = {float(t_end)!r} s after {counted(log.count, 'collision')}"
     return Status.FAILED, f"the integrator stopped with outcome {outcome!s}"
 
 

@@ -33,7 +33,7 @@ import mpmath
 import numpy as np
 
 from ..model.laws import GeneralizedNewtonLaw, ImpulseMap, impulse_map
-from ..model._numbers import DEKKER_SPLIT, halves, workprec
+from ..model._numbers import DEKKER_SPLIT, TOUCHING_SLACK, halves, workprec
 from .resolve.friction import slipping, slipping_law
 from .compiled_cache import by_constants
 from .system import SceneSystem, overlap_tolerance, unit_acceleration, unit_jerk
@@ -1084,6 +1084,17 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                 open_gap(s, number, scale)
         return True
 
+    def close_start(s) -> None:
+        """Pairs that start past touching by no more than the scene accepts (model.touching_slack: places
+        written as doubles) are moved to touching in the run's type, the second unit moved, in order along
+        the circle: in long, quad or MPFR such a gap is far beyond the settler's band, unseen, and the
+        pair ran into each other (measured: status overlap at t_end)."""
+        for a, b, constant in geometry:
+            g = s[b] - s[a] + constant
+            if g < 0 and -g <= TOUCHING_SLACK * (1 + abs(s[a]) + abs(s[b])):
+                s[b] = s[b] - g
+
+    settle.close_start = close_start
     settle.lift_gap = lift_gap  # for a gap rising through zero (reopening_check)
     # settle(s, t, every unit) leaves s as it is and returns True where no pair touches (the band of
     # touching_elsewhere is the widest settle looks at): the driver skips it at such a mode's start

@@ -15,6 +15,11 @@ from .compiled_cache import by_constants
 from .precision import Precision
 
 
+def counted(n: int, noun: str) -> str:
+    """'1 collision', '2 collisions': counts in messages and reports, in English."""
+    return f"{n} {noun}" + ("" if n == 1 else "s")
+
+
 class Status(str, Enum):
     """How a run ended. ``completed``, ``max_collisions`` and ``max_events`` are successes.
 

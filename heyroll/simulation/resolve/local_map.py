@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...model._numbers import workprec
+from ...model._numbers import TOUCHING_SLACK, workprec
 from .friction import slipping, slipping_law
 from ..contact_function import CONTACT_VALUES, evaluate
 from .constraints import cluster_impact
@@ -302,6 +302,19 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
                     s[b] = moved
         return True
 
+    def close_start(s) -> None:
+        """As the circle's (events.contact_settler): pairs started past touching within the scene's slack
+        are moved to touching in the run's type (Newton steps on the second body's coordinate)."""
+        if function is None:
+            return
+        for number, (a, b) in enumerate(where):
+            for _ in range(3):
+                gap, _gi, gj = values(s, number)[:3]
+                if not (gap < 0 and -gap <= TOUCHING_SLACK * (1 + abs(s[a]) + abs(s[b])) and gj > 0):
+                    break
+                s[b] = s[b] - gap / gj
+
+    settle.close_start = close_start
     return settle
 
 

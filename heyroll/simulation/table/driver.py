@@ -17,7 +17,7 @@ from ...model._numbers import workprec
 from ...model.table import TableScene
 from ...model.table.boundaries import sqrt
 from ..driver import DEFAULT_MAX_EVENTS, RunOptions, signals_deferred
-from ..result import Status
+from ..result import Status, counted
 from . import bonds as bonds_module
 from .bonds import MAX_CLUSTER_BONDS, bond_balls
 from .contacts import Contact, ContactGeometry
@@ -67,7 +67,7 @@ def simulate_table(scene: TableScene, opts: RunOptions, sink=None, progress=None
     try:
         run.loop()
     except KeyboardInterrupt:
-        run.stop(Status.INTERRUPTED, f"interrupted at t = {float(run.t):.17g} s after {run.count} impacts")
+        run.stop(Status.INTERRUPTED, f"interrupted at t = {float(run.t):.17g} s after {counted(run.count, 'impact')}")
     return run.finish(time.perf_counter() - started)
 
 
@@ -213,7 +213,7 @@ class _Run:
                 continue
             if outcome == time_limit:
                 self.pull()
-                self.stop(Status.COMPLETED, f"reached t_end = {float(self.t_end)!r} s after {self.count} impacts")
+                self.stop(Status.COMPLETED, f"reached t_end = {float(self.t_end)!r} s after {counted(self.count, 'impact')}")
                 break
             if outcome == step_limit:
                 if ta.time == before:
@@ -1843,7 +1843,7 @@ class _Run:
             except KeyboardInterrupt:  # (after the integration's end: the run is whole, its outputs too)
                 if self.status.success:
                     self.status, self.message = Status.INTERRUPTED, (
-                        f"interrupted at t = {float(self.t):.17g} s after {self.count} impacts, while the table was "
+                        f"interrupted at t = {float(self.t):.17g} s after {counted(self.count, 'impact')}, while the table was "
                         "written (it is whole)")
         if self.progress is not None:
             self.progress(float(self.t), self.count)
