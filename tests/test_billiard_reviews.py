@@ -529,3 +529,23 @@ def test_a_member_settling_onto_its_cushion_bonds_it_instead_of_letting_its_pair
     table = result.collision_table()
     assert np.all(table["energy_after"] <= table["energy_before"] * (1 + 1e-14))
     assert np.all(table["energy_before"][1:] <= table["energy_after"][:-1] * (1 + 1e-14))
+
+
+@pytest.mark.parametrize("precision", ["double", "long", "quad"])
+def test_balls_placed_past_touching_by_round_off_collide_at_t0_in_every_precision(precision):
+    """A ball touching its neighbour along a diagonal, placed to 17 digits 3e-17 m past touching (the scene
+    accepts it: model.touching_slack) and hit at t = 0: in quad that overlap was beyond the contact tolerance,
+    status overlap at t = 0; the start now moves it to touching in the run's type."""
+    import mpmath
+
+    with mpmath.workdps(30):
+        place = mpmath.nstr(mpmath.mpf("0.2") / mpmath.sqrt(2) - mpmath.mpf("3e-17"), 17)
+    text = ('[track]\ntype = "table"\nboundary = "circle"\nradius = 2.0\n'
+            '[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nx = 0.0\ny = 0.0\nvx = 1.0\nvy = 1.0\n'
+            f'[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nx = {place}\ny = {place}\n'
+            '[run]\nt_end = 0.5\n')
+    result = simulate(parse_scene(text), precision=precision)
+    assert result.status is Status.COMPLETED, result.message
+    assert result.n_collisions == 1 and float(result.collision_table()["t"][0]) == 0.0
+    final = np.asarray(result.state_final, dtype=float)  # (x, y, vx, vy, ux, uy) per ball: a head-on exchange
+    assert final[2:4] == pytest.approx([0.0, 0.0], abs=1e-12) and final[8:10] == pytest.approx([1.0, 1.0], rel=1e-12)

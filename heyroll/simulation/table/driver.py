@@ -13,7 +13,7 @@ import time
 
 import heyoka as hy
 
-from ...model._numbers import workprec
+from ...model._numbers import TOUCHING_SLACK, workprec
 from ...model.table import TableScene
 from ...model.table.boundaries import sqrt
 from ..driver import DEFAULT_MAX_EVENTS, RunOptions, signals_deferred
@@ -176,10 +176,25 @@ class _Run:
             self.set_mode(k)
 
     # -- the loop ------------------------------------------------------------------------------
+    def close_start(self) -> None:
+        """Balls placed past touching by no more than the scene accepts (model.touching_slack: places written
+        as doubles) are moved to touching in the run's type, the second ball along the line of centres: in long,
+        quad or MPFR such an overlap is far beyond the contact tolerance (measured: status overlap at t = 0)."""
+        n = self.system.n_balls
+        for i in range(n):
+            for j in range(i + 1, n):
+                si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
+                distance, (nx, ny) = self.geometry.pair(i, j, self.state)
+                size = max(1, *(abs(float(self.state[c])) for c in (si, si + 1, sj, sj + 1)))
+                if distance < self.zero and -float(distance) <= TOUCHING_SLACK * size:
+                    self.state[sj] = self.state[sj] - distance * nx
+                    self.state[sj + 1] = self.state[sj + 1] - distance * ny
+
     def loop(self) -> None:
         if self.limit == 0:
             self.stop(Status.MAX_COLLISIONS, "max_collisions = 0: nothing integrated")
             return
+        self.close_start()
         self.ta = integrator(self.scene, self.system, self.precision, self.options, self.state)
         self.ta.pars[:] = self.pars
         # contacts that touch and approach at the start (a ball launched into a touching neighbour)
