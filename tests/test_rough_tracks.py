@@ -695,3 +695,70 @@ def test_the_validation_report_says_friction_works_between_collisions(tmp_path):
     result = simulate(parse_scene(ROUGH_SCENE), t_end=2.0)
     text = "\n".join(section_energy(SimpleNamespace(double=result, out_dir=tmp_path, figures=[])))
     assert "keeps its own mechanical energy" not in text and "the work of friction" in text
+
+
+# -- junctions: the reaction jumps with the curvature (review) ---------------------------------------------
+
+#: A line at -0.3 rad into a convex arc of radius 1: the centre path's curvature jumps at s = 1.
+LINE_INTO_HUMP = """
+[track]
+type = "arcs"
+start_x = 0.0
+start_y = 3.0
+{extra}
+[[track.segments]]
+kind = "line"
+angle = -0.3
+length = 1.0
+[[track.segments]]
+kind = "arc"
+radius = 1.0
+side = "convex"
+start = 0.3
+end = 1.0
+[[bodies]]
+{body}
+s = 0.5
+ds = {ds}
+"""
+
+
+def _junction_scene(extra, body, ds):
+    return parse_scene(LINE_INTO_HUMP.format(extra=extra, body=body, ds=ds))
+
+
+def test_a_rolling_disk_slips_where_it_passes_onto_an_arc_whose_friction_cannot_hold_it():
+    """mu = 0.15, a disk rolling down the line: at the junction (closed form: v = sqrt(1.9^2 + 2 a 0.5),
+    a = g sin 0.3 / kappa) rolling needs F = (1 - 1/kappa) g sin 0.3 = 0.966 N but mu N = 0.15 (g cos 0.3 -
+    v^2/1.1) = 0.650 N: it slips there. Before, no event saw the jump and it rolled on."""
+    scene = _junction_scene("friction = 0.15", 'shape = "disk"\nradius = 0.1\nmass = 1.0', "1.9")
+    result = simulate(scene, t_end=0.5)
+    with mpmath.workdps(30):
+        g, s3 = mpmath.mpf("9.81"), mpmath.sin(mpmath.mpf("0.3"))
+        a = g * s3 / mpmath.mpf("1.5")
+        v = mpmath.sqrt(mpmath.mpf("1.9") ** 2 + a)
+        t = (v - mpmath.mpf("1.9")) / a
+        assert (1 - 1 / mpmath.mpf("1.5")) * g * s3 > mpmath.mpf("0.15") * (g * mpmath.cos(mpmath.mpf("0.3")) - v**2 / mpmath.mpf("1.1"))
+    first = result.transitions[0]
+    assert (first[1], first[2], first[3]) == (0, "rolling", "sliding+")
+    assert first[0] == pytest.approx(float(t), rel=1e-13) and first[5] == pytest.approx(float(v), rel=1e-13)
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work), rel=1e-9)
+
+
+def test_a_sliding_particle_passing_onto_a_hump_is_braked_whichever_side_the_track_pushes_from():
+    """mu = 0.3, two-sided: at the junction N = g cos 0.3 - v^2/1 jumps below 0 (v = 3.51): the track pushes
+    from the other side. The side is judged there; a stale one made friction push the particle on (the energy
+    rose by 0.24 J)."""
+    scene = _junction_scene("friction = 0.3", 'shape = "particle"\nmass = 1.0', "3.5")
+    result = simulate(scene, t_end=0.3)
+    assert result.passage_counts[0] == 1 and all(w > 0 for w in result.friction_work)
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work), rel=1e-9)
+
+
+def test_a_body_leaves_a_one_sided_track_where_it_passes_onto_a_hump_too_sharp_for_its_speed():
+    """One-sided, smooth: N = g cos 0.3 - v^2/1.1 < 0 just past the junction (v = 3.766): left_track there
+    (it stayed glued to the hump and bounced off the limiter)."""
+    scene = _junction_scene('sides = "one"', 'shape = "disk"\nradius = 0.1\nmass = 1.0', "3.5")
+    result = simulate(scene, t_end=0.5)
+    assert result.status.value == "left_track" and "N < 0 at s = 1," in result.message
+    assert float(result.final_state[0]) == pytest.approx(1.0, abs=1e-12)

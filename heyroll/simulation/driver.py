@@ -33,8 +33,8 @@ from .resolve.friction import FrictionState, initial_modes
 from .compiled_cache import CompiledCache, by_constants, by_scene
 from .precision import Precision
 from .result import SimulationResult, Status, counted, passage_table
-from .contact_function import BODY_VALUES, body_function, evaluate
-from .resolve.bounds import parameters_on_pieces
+from .contact_function import body_function, evaluate
+from .resolve.bounds import left_track_message, parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
 from .system import (
     SceneSystem, Unit, build_system, cluster_unit, link_bodies, singleton_units_of, overlap_tolerance, piece_of, singleton_units,
@@ -704,23 +704,16 @@ def _track_limit_at_start(scene: Scene, system: SceneSystem, state) -> tuple[str
     same forces as the events (see system._track_events), in the run's type.
     """
     n = len(scene.bodies)
-    mu = None if scene.track_friction is None else float(scene.track_friction)
-    if scene.track_sides != "one" and (mu is None or scene.rough):  # nothing to check (the usual case)
+    if scene.track_sides != "one":  # nothing to check (the usual case; a rough track's modes start in friction)
         return None
     function = body_function(system)
     if function is None:
         return None
     values = evaluate(function, system.reduce(list(state)), system.parameters).tolist()
-    c = scene.coordinate
-    for k, body in enumerate(scene.bodies):
-        normal, driving = (float(x) for x in values[BODY_VALUES * k + 2: BODY_VALUES * k + 5: 2])
-        where = f"at {c} = {float(state[k]):.17g}, d{c} = {float(state[n + k]):.17g}, t = 0 s"
-        if scene.track_sides == "one" and normal < 0:
-            return "left_track", f"body {k + 1} cannot stay on the one-sided track: its normal force N < 0 {where}"
-        if mu is not None and body.kappa > 1 and not scene.rough:
-            friction = driving * (1 - 1 / float(body.kappa))
-            if abs(friction) > mu * normal:
-                return "slip", f"body {k + 1} slips from the start: the friction needed to roll exceeds mu N {where}"
+    for k in range(n):
+        message = left_track_message(scene, values, k, state[k], state[n + k], 0)
+        if message is not None:
+            return "left_track", message
     return None
 
 

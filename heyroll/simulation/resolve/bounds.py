@@ -47,6 +47,16 @@ def parameters_on_pieces(scene, system, pieces) -> list:
     return params
 
 
+def left_track_message(scene, values, k: int, q, dq, t) -> str | None:
+    """Why body k cannot stay on a one-sided track (its normal force N < 0, read from the compiled body
+    function's ``values``), or None: the run's start and every junction passage ask this."""
+    if scene.track_sides != "one" or not float(values[BODY_VALUES * k + 2]) < 0:
+        return None
+    c = scene.coordinate
+    return (f"body {k + 1} cannot stay on the one-sided track: its normal force N < 0 at {c} = {float(q):.17g}, "
+            f"d{c} = {float(dq):.17g}, t = {float(t):.17g} s")
+
+
 def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, function, settle=None):
     """The callback of a piece end; ``pieces[k]`` is the piece body k is on (kept per run); ``settle``: the
     mode's contact settler, for a neighbour touching the body as it rebounds."""
@@ -67,6 +77,24 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
     upper = event.end == "upper"
     step = 1 if upper else -1
     stop = log.stop
+    one_sided = scene.track_sides == "one" and function is not None and not in_cluster
+
+    def after_junction(ta, s, pars, t) -> bool:
+        """The reaction jumps with the curvature at a junction, and the events that watch its sign (a one-sided
+        track's left_track, a rough track's side and slip onset) see no root there: judged now, as at a run's
+        start (review: a body glued to a hump it should leave; a stale side made friction push a particle on,
+        +0.24 J; a rolling disk whose needed friction exceeded mu_s N on the new arc never slipped)."""
+        if one_sided:
+            values = evaluate(function, s, pars, t)
+            message = left_track_message(scene, values, k, s[u], s[nu + u], t)
+            if message is not None:
+                stop.reason, stop.message = "left_track", message
+                return False
+        modes = holder[2] if len(holder) > 2 else None
+        if modes is not None:
+            modes.at_junction(ta, s, t, k)
+            return not log.events_exhausted()
+        return True
 
     def on_bound(ta, d_sgn):
         s, pars = holder[0], holder[1]  # pars: the full parameter vector (see driver)
@@ -83,7 +111,7 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
             pars[block.first:block.first + len(values[new])] = values[new]
             kept = ta.pars  # heyoka keeps the parameters up to the last one its equations and events use
             kept[:] = pars[: len(kept)]
-            return log.record_passage((t, k, 0, piece, new, q, v, v))
+            return log.record_passage((t, k, 0, piece, new, q, v, v)) and after_junction(ta, s, pars, t)
         v_new = -k_lim * v
         s[nu + u] = v_new
         s[u] = q - margin if upper else q + margin

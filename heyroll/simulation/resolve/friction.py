@@ -274,6 +274,28 @@ class FrictionModes:
                     self.log.friction_transitions += 1
                 values = None
 
+    def at_junction(self, ta, s, t, body: int) -> None:
+        """Body ``body`` has passed a junction of its track: its reaction jumps with the curvature, and the
+        events that watch it (normal: the side a two-sided track pushes from; release and slip: static
+        friction's capacity) see no root. Judged now, as at a mode's start (:meth:`start`)."""
+        values = None
+        for b, block in enumerate(self.system.friction_blocks):
+            if body not in block.members:
+                continue
+            if block.side >= 0:
+                values = self._evaluate(s, t) if values is None else values
+                normal = values[BLOCK_VALUES * b + 3]
+                if normal != 0:
+                    self._set(ta, block.side, -self.one if normal < 0 else self.one)
+            if block_mode(self.system, block, self.holder[1]) in ("stuck", "rolling"):
+                holds, direction, weightless = self._holds(s, t, b, weightless=True)
+                if not (holds or weightless):  # as a release event would have: it slides from here
+                    new = "sliding+" if direction > 0 else "sliding-"
+                    self._start_moving(s, block, direction)
+                    self.apply(ta, block, new)
+                    self._note(t, s, block, new)
+                    self.log.friction_transitions += 1
+
     def spins(self, before, t, was) -> list:
         """Per body: u = sigma q' - w, the speed its spin rolls at, where it slipped in state
         ``before`` (modes ``was``); nan where it rolled. An impulse through a slipping body's centre
