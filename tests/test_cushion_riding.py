@@ -134,6 +134,21 @@ def test_a_ball_started_along_a_curved_cushion_at_k1_rides_it():
     assert float(along.energy_final) == pytest.approx(float(along.energy_initial), rel=1e-12)
 
 
+def test_a_sliding_ball_drawn_into_a_graze_of_a_curved_cushion_at_k1_rides_it():
+    """k_c = 1 on a circle, balls that slide: friction bends a sliding ball's path into a graze of the cushion,
+    whose limit is riding it; riding is compiled there now (the run stopped at t = 1.314 s: acceptance test)."""
+    from pathlib import Path
+
+    from heyroll.interfaces.scene_file import load_scene
+
+    result = simulate(load_scene(Path(__file__).parent / "data" / "ring_break_k1_circle.toml"), t_end=2.0)
+    assert result.status is Status.COMPLETED, result.message
+    flags = list(result.collision_table()["law_flag"])
+    assert SETTLED in flags and float(result.t_final) == 2.0
+    energies = result.collision_table()["energy_after"]
+    assert np.all(np.diff(energies) <= 1e-12 * energies[0])  # plastic impacts and friction: never gains
+
+
 def slipping(x, y, vx, vy, ux, uy, radius=0.1):
     """A ball at (x, y) with velocity v and slip u (the spin from w = v - u = R (omega_y, -omega_x))."""
     wx, wy = vx - ux, vy - uy

@@ -887,7 +887,8 @@ def final_status(scene, precision, log, outcome, t_end, final_state, limit, even
             status, message = Status.OVERLAP, overlap
     if log.fallbacks and status.success:
         message += (
-            f"; {log.fallbacks} collisions left the bodies approaching under the '{scene.law.name}' law and were "
+            f"; {counted(log.fallbacks, 'collision')} left the bodies approaching under the '{scene.law.name}' law and "
+            f"{'was' if log.fallbacks == 1 else 'were'} "
             "resolved by Newton's law on the gap rate (law_flag = 1)"
         )
     return status, message

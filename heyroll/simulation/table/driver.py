@@ -1427,7 +1427,7 @@ class _Run:
           the cushion and rolls or skids along it pressed against it (:meth:`settle_riders`,
           :meth:`ride`). A ball started touching a curved cushion and moving along it is the same case.
           A sliding ball that friction draws into the table leaves it. Where riding is not compiled
-          (k = 1) the run stops: not modelled.
+          (k = 1, no ball can slide nor starts along a curved cushion: system.can_ride) the run stops.
         * Pressed against a cushion: no normal speed left (k = 0), or bounces too low to resolve, while
           sliding friction drives the ball into the cushion. Where riding is compiled (k < 1) it is their
           limit: the ball settles and skids along this wall (a ball riding another wall, in a corner, now rides
@@ -1448,7 +1448,8 @@ class _Run:
             if self.lifted.get(k) == self.t or not self.pressed_on(k, contact.j):
                 return  # friction draws it into the table: it leaves the cushion
             why = ("it did not settle onto the cushion" if self.system.ride else
-                   "impacts accumulate: the ball settles onto the cushion; riding it is modelled only for k < 1")
+                   "impacts accumulate: the ball settles onto the cushion; at k = 1 riding is compiled only where a "
+                   "ball can slide or starts along a curved cushion")
             self.stop(Status.FAILED, f"ball {k + 1} moves along the curved cushion at t = {float(self.t):.17g} s with a "
                                      f"normal speed {abs(float(vn / sqrt(speed2))):.3g} of its speed, too slow to resolve its "
                                      f"next impact ({why})")
