@@ -120,24 +120,8 @@ def test_figures(tmp_path):
         assert (tmp_path / name).read_bytes()[:4] == b"\x89PNG"
 
 
-#: A forced ball and a ring in a circle (a smooth track: the Lyapunov estimate applies).
-FORCED_CIRCLE = """
-name = "forced-circle"
-[track]
-type = "circle"
-radius = 1.0
-[[bodies]]
-shape = "solid_sphere"
-radius = 0.1
-mass = 1.0
-phi = -0.7
-dphi = 0.3
-[[bodies]]
-shape = "ring"
-radius = 0.15
-mass = 2.0
-phi = 0.6
-dphi = 0.0
+#: The equal balls, forced (a smooth track: the Lyapunov estimate applies).
+FORCED_CIRCLE = EQUAL_BALLS + """
 [forcing]
 kind = "force"
 amplitude = 3.0
