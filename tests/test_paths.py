@@ -613,3 +613,17 @@ def test_path_branches_drawn_are_the_runs_trajectory_jumping_at_its_collisions()
             assert after[n + k] == pytest.approx(row[f"dq_{side}_after"], abs=1e-6)
     t, X = result.sample(2000)
     assert scene.gap(0, 1, X[:, 0], X[:, 1]).min() > -1e-9  # no drawn branch passes through the other body
+
+
+@pytest.mark.parametrize("shape", ["solid_sphere", "particle"])
+def test_a_body_started_where_a_whole_power_of_x_vanishes_runs(shape):
+    """y = x**4 - x**2, a body on the hump at x = 0: heyoka's pow(x, 4) has NaN Taylor coefficients at x = 0
+    (the run failed at t = 0 with a non-finite state: acceptance test); whole powers are products now."""
+    body = 'shape = "particle"\nmass = 1.0' if shape == "particle" else \
+        f'shape = "{shape}"\nradius = 0.05\nmass = 1.0'
+    scene = heyroll.parse_scene('[track]\ntype = "curve"\ny = "x**4 - x**2"\nx_min = -1.5\nx_max = 1.5\n'
+                                f'[[bodies]]\n{body}\nx = 0.0\ndx = 0.5\n[run]\nt_end = 5\n')
+    result = heyroll.simulate(scene)
+    assert result.status is heyroll.Status.COMPLETED, result.message
+    assert abs(result.energy_final - result.energy_initial) <= 1e-13 * abs(result.energy_initial)
+    assert abs(float(result.final_state[0])) > 0.5  # it rolled off the hump into a well

@@ -202,6 +202,8 @@ class Library:
 
     number: Callable[[str], object]
     functions: Mapping[str, Callable]
+    #: ``a ** n`` for a whole n, where ``a ** n`` itself will not do (None: ``a ** n``)
+    whole_power: Callable | None = None
 
 
 def evaluate(node: Node, x, lib: Library):
@@ -224,7 +226,8 @@ def evaluate(node: Node, x, lib: Library):
     if node.op == "/":
         return a / b
     if isinstance(node.right, Num) and _is_whole(node.right.text):
-        return a ** int(Decimal(node.right.text))  # whole powers stay exact (x**2 == x*x)
+        n = int(Decimal(node.right.text))  # whole powers stay exact (x**2 == x*x)
+        return a ** n if lib.whole_power is None else lib.whole_power(a, n)
     return a**b
 
 
@@ -359,3 +362,19 @@ def check_differentiable(node: Node, field: str) -> None:
         check_differentiable(node.right, field)
     elif isinstance(node, (Neg, Call)):
         check_differentiable(node.arg, field)
+
+
+def power_by_products(a, n: int):
+    """``a ** n`` for a whole n by squaring and multiplying (1/a^|n| for n < 0): heyoka's pow(x, n) takes its
+    Taylor coefficients through a recurrence that divides by x, NaN at x = 0 (a double well y = x**4 - x**2
+    failed from a body started on its hump at x = 0: acceptance test); products have none."""
+    if n < 0:
+        return 1.0 / power_by_products(a, -n)
+    result, base = None, a
+    while n:
+        if n & 1:
+            result = base if result is None else result * base
+        n >>= 1
+        if n:
+            base = base * base
+    return 1.0 + 0.0 * a if result is None else result

@@ -111,6 +111,16 @@ class Track(Protocol):
         ...
 
 
+def heyoka_library(dyn: "Dynamics"):
+    """How a track's formula becomes a heyoka expression: its numbers runtime parameters (rounded once to the
+    run's type from their decimal text), sin cos exp sqrt heyoka's, whole powers products."""
+    from .. import expression as ex
+
+    return ex.Library(number=lambda t: dyn.par(mpmath.mpf(t)),
+                      functions={"sin": hy.sin, "cos": hy.cos, "exp": hy.exp, "sqrt": hy.sqrt},
+                      whole_power=ex.power_by_products)
+
+
 def lagrangian_terms(x_c, y_c, q, v, kappa, dyn: Dynamics) -> BodyTerms:
     """The default equation of motion and forces from the centre's path C(q) (see the module doc)."""
     dx, dy = _by_coordinate(x_c, q), _by_coordinate(y_c, q)

@@ -18,7 +18,7 @@ from ...errors import SceneError
 from .. import expression as ex
 from .._numbers import Real, is_finite, to_mpf, workprec
 from ..bodies import Body
-from .base import BodyTerms, Dynamics
+from .base import BodyTerms, Dynamics, heyoka_library
 
 NUMPY = ex.Library(number=float, functions={"sin": np.sin, "cos": np.cos, "exp": np.exp, "sqrt": np.sqrt})
 MPMATH = ex.Library(number=lambda t: mpmath.mpf(t), functions={
@@ -130,8 +130,7 @@ class CurveTrack:
         The curve's numbers become runtime parameters, rounded once to the
         run's type from their decimal text.
         """
-        lib = ex.Library(number=lambda t: dyn.par(mpmath.mpf(t)),
-                         functions={"sin": hy.sin, "cos": hy.cos, "exp": hy.exp, "sqrt": hy.sqrt})
+        lib = heyoka_library(dyn)
         f0, f1, f2, f3 = (_as_expression(ex.evaluate(node, q, lib)) for node in (self.f, self.df, self.d2f, self.d3f))
         g_k = dyn.par(dyn.g / body.kappa)
         g = dyn.par(dyn.g)

@@ -25,7 +25,7 @@ from ...errors import SceneError
 from .. import expression as ex
 from .._numbers import Real, is_finite, to_mpf
 from ..bodies import Body
-from .base import BodyTerms, Dynamics, lagrangian_terms
+from .base import BodyTerms, Dynamics, heyoka_library, lagrangian_terms
 from .curve import CURVE_CHECK_POINTS, _as_expression, numeric
 
 
@@ -122,8 +122,7 @@ class ParametricTrack:
         return ()
 
     def terms(self, body: Body, q, v, dyn: Dynamics, piece_par) -> BodyTerms:
-        lib = ex.Library(number=lambda t: dyn.par(mpmath.mpf(t)),
-                         functions={"sin": hy.sin, "cos": hy.cos, "exp": hy.exp, "sqrt": hy.sqrt})
+        lib = heyoka_library(dyn)
         x, y = (_as_expression(ex.evaluate(node, q, lib)) for node in (self.fx, self.fy))
         if body.radius:
             x1, y1 = (_as_expression(ex.evaluate(node, q, lib)) for node in (self.dfx, self.dfy))
