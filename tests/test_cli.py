@@ -354,3 +354,31 @@ def test_validate_writes_its_report_where_the_lyapunov_reference_leaves_a_one_si
     assert main(["validate", str(scene), "--out", str(tmp_path / "val"), "--collisions", "3"]) == 0
     report = (tmp_path / "val" / "report.md").read_text()
     assert "largest Lyapunov exponent: not estimated (the reference trajectory failed" in report
+
+
+def test_a_run_with_no_trajectory_to_draw_writes_its_summary_and_says_no_figures(tmp_path, capsys, monkeypatch):
+    """A path-track run that failed at its start (a curve whose x**4 was NaN at x = 0, acceptance test) has no
+    continuous output: drawing its figures raised a traceback and summary.json was never written. Now the
+    summary says why there are no figures, the report says it in one line, and summary.json is strict JSON
+    (a non-finite number is null, not NaN)."""
+    import dataclasses
+
+    import heyroll.simulation.driver as driver
+
+    real = driver.simulate
+
+    def without_trajectory(scene, **kwargs):  # the figures' dense re-run of a run that failed at once
+        result = real(scene, **kwargs)
+        return dataclasses.replace(result, dense=()) if kwargs.get("dense") else result
+
+    monkeypatch.setattr(driver, "simulate", without_trajectory)
+    out = tmp_path / "o"
+    assert main(["run", str(EXAMPLE.parent / "arc_chain.toml"), "--t-end", "0.5", "--out", str(out),
+                 "--progress", "off"]) == 0
+    report = capsys.readouterr().out
+    assert "no figures: the run has no trajectory to draw" in report
+    summary = json.loads((out / "summary.json").read_text(), parse_constant=lambda name: pytest.fail(name))
+    assert summary["files"]["figures"].startswith("none: ") and not list(out.glob("*.png"))
+    from heyroll.interfaces.outputs import _finite_or_null
+
+    assert _finite_or_null({"e": [1.0, float("nan"), float("inf")], "s": "x"}) == {"e": [1.0, None, None], "s": "x"}

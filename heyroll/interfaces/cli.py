@@ -214,8 +214,8 @@ def _run(args) -> int:
             print("interrupted: writing the table and summary.json, then the figures (Ctrl-C again to skip them)",
                   file=sys.stderr, flush=True)
         with _sigterm_as_interrupt():
-            write_run(result, out, scene_source=args.scene or "<default scene>", figures=not args.no_figures,
-                      sink=sink)
+            written = write_run(result, out, scene_source=args.scene or "<default scene>",
+                                figures=not args.no_figures, sink=sink)
     except FiguresInterrupted:
         print(f"{result.status.value}: {result.message}")
         print(f"interrupted while drawing the figures: {out}/ holds the whole table and summary.json, no figures")
@@ -230,6 +230,8 @@ def _run(args) -> int:
     rate = result.n_collisions / result.wall_time_s if result.wall_time_s > 0 else float("nan")
     print(f"{scene.describe()}")
     print(f"{result.status.value}: {result.message}")
+    if str(written["files"].get("figures", "")).startswith("none:"):
+        print(f"no figures: {written['files']['figures'][len('none: '):]}")
     for warning in result.settings.get("warnings", []):
         print(f"warning: {warning}")
     if is_table(result):

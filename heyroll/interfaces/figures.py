@@ -194,6 +194,11 @@ def run_figures(result: SimulationResult, out_dir: Path) -> dict:
     if not t_end > 0:
         t_end = float(scene.run.t_end)
     dense = simulate(scene, t_end=t_end, max_collisions=None, precision="double", dense=True)
+    if not dense.dense:
+        from .outputs import FiguresUnavailable
+
+        raise FiguresUnavailable(f"the run has no trajectory to draw ({dense.status.value} at t = {dense.t_final:.6g} s: "
+                                 f"{dense.message})")
     if scene.track.linear_gap:
         phase_portrait_figure(dense, out_dir / "phase_portrait.png")
         energy_figure(dense, out_dir / "energy.png")

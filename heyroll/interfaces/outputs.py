@@ -7,6 +7,7 @@ interrupted or failed write never leaves a half-written file behind.
 from __future__ import annotations
 
 import json
+import math
 import os
 import platform
 from pathlib import Path
@@ -295,6 +296,10 @@ def _table_figures(result, out_dir):
     return table_figures(result, out_dir)
 
 
+class FiguresUnavailable(Exception):
+    """A run has nothing the figures could draw (it failed at its start): summary.json says so, no figures."""
+
+
 class FiguresInterrupted(KeyboardInterrupt):
     """Ctrl-C (or SIGTERM) while a run's figures were drawn: its table and summary.json are whole, its figures
     were dropped (``summary``: what summary.json holds)."""
@@ -309,14 +314,21 @@ def _figures_then_summary(draw, result, out_dir: Path, scene_source: str, files:
     half-written picture is no output), summary.json is written without them (``"figures": "interrupted"``) and
     FiguresInterrupted is raised."""
     before = {p.name for p in out_dir.glob("*.png")}
-    try:
-        files.update(draw(result, out_dir))
-    except KeyboardInterrupt:
+
+    def remove_begun():
         for path in out_dir.glob("*.png"):
             if path.name not in before:
                 path.unlink(missing_ok=True)
+
+    try:
+        files.update(draw(result, out_dir))
+    except KeyboardInterrupt:
+        remove_begun()
         summary = _write_summary(result, out_dir, scene_source, dict(files, figures="interrupted"), sink)
         raise FiguresInterrupted(summary) from None
+    except FiguresUnavailable as exc:  # (a run that failed at its start has no trajectory to draw)
+        remove_begun()
+        files["figures"] = f"none: {exc}"
     return _write_summary(result, out_dir, scene_source, files, sink)
 
 
@@ -325,8 +337,19 @@ def _write_summary(result, out_dir: Path, scene_source: str, files: dict, sink) 
     summary = summary_dict(result, scene_source=scene_source, files=files)
     summary["table_format"] = sink.format
     summary["table_rows"] = sink.rows
-    atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2, allow_nan=True) + "\n")
+    # strict JSON (jq, node and DuckDB refuse NaN): a number that is not finite (a failed run's energy) is null
+    atomic_write_text(out_dir / "summary.json", json.dumps(_finite_or_null(summary), indent=2, allow_nan=False) + "\n")
     return summary
+
+
+def _finite_or_null(value):
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite_or_null(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite_or_null(v) for v in value]
+    return value
 
 
 def _write_table_run(result, out_dir: Path, *, scene_source: str, figures: bool, sink) -> dict:
