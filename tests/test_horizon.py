@@ -157,3 +157,27 @@ def test_lyapunov_on_a_path_track_in_a_turning_plane_is_estimated_and_regular():
     short, long = lyapunov_estimate(scene, t_end=40.0), lyapunov_estimate(scene, t_end=160.0)
     assert 0 < long.exponent < short.exponent and long.exponent < 2 * long.regular_level
     assert not long.chaotic and long.interval == pytest.approx(2 * math.pi / 3.0 / 4)  # a quarter turn
+
+
+def test_the_quad_run_stops_a_few_time_scales_past_the_double_runs_last_collision(monkeypatch):
+    """A dissipative scene ends in persistent contact: `validate` asked both runs for t_end = 1e5 s and the quad
+    one ran for more than 13 minutes (acceptance test). Nothing is compared past the double run's last
+    collision: the quad run stops four motion time scales after it."""
+    from heyroll.interfaces.scene_file import default_scene_text
+    from heyroll.simulation.driver import motion_time_scale
+
+    scene = heyroll.parse_scene(default_scene_text().replace("restitution = 1.0", "restitution = 0.3"))
+    asked = []
+    real = heyroll.simulate
+
+    def recording(sc, **kwargs):
+        asked.append((kwargs["precision"], kwargs["t_end"], kwargs["max_collisions"]))
+        return real(sc, **kwargs)
+
+    monkeypatch.setattr(heyroll, "simulate", recording)
+    h = predictability_horizon(scene, n_max=400, threshold=1e-10, t_end=1e5)
+    double = real(scene, t_end=1e5, max_collisions=400)
+    assert double.n_collisions < 400 and h.n_double == double.n_collisions  # it ends in contact, not at n_max
+    quad_ends = {t for p, t, n in asked if p == "quad"}
+    assert quad_ends == {float(double.times[-1]) * (1 + 1e-9) + 4 * motion_time_scale(scene)}
+    assert h.n_agree == h.n_double  # every collision of the double run compared and agreeing
