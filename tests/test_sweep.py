@@ -589,3 +589,15 @@ def test_keep_repeated_is_one_list_and_points_without_strobe_samples_are_refused
     assert main(["run", "--max-collisions", "1", "--no-figures", "--out", str(tmp_path / "r"),
                  "--progress", "off"]) == 0
     assert "1 collision, 0 limiter impacts, 0 junction passages" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("keys", [("bodies[1].dphi", "bodies[1].omega"), ("bodies[2].density", "bodies[2].mass")])
+def test_two_keys_that_set_one_quantity_are_refused(keys, tmp_path):
+    """dphi and omega (mass and density) of one body are one quantity: varied together, the second written
+    dropped the first and one axis was silently ignored (its points labelled apart, equal: acceptance test)."""
+    with pytest.raises(SweepError, match=r"are one quantity .* vary one of them") as caught:
+        make_plan(None, grid=[("vary", f"{keys[0]}=0.5:1:2"), ("vary", f"{keys[1]}=0.5:1:2")])
+    assert caught.value.field == "--vary"
+    with pytest.raises(SweepError, match="one quantity"):
+        make_plan(None, random=[f"{keys[0]}=0.5:1", f"{keys[1]}=0.5:1"], samples=3)
+    assert make_plan(None, grid=[("vary", f"{keys[0]}=0.5:1:2"), ("vary", "bodies[2].phi=0.1:0.2:2")]).n_points == 4

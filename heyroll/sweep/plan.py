@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import SceneError, SceneFileError
 from .errors import SweepError
-from .keys import Key, parse_key, units
+from .keys import ALTERNATIVES, Key, parse_key, units
 
 #: Points per chunk (one task, one region write) at most: up to ~0.5 s of work per task on the default
 #: scene, so that the per-chunk cost of this process (the store's write, Dask's messages) is small beside it
@@ -234,6 +234,12 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
         key = parse_key(text_key, data)
         if key.text in seen:
             raise SweepError(flag, f"{key.text} is varied twice")
+        other = ALTERNATIVES.get(key.field)
+        if other is not None and key.path[0][0] == "bodies":
+            twin = ".".join(key.text.split(".")[:-1] + [other])
+            if twin in seen:  # (apply() writes one and drops the other: one axis would be ignored)
+                raise SweepError(flag, f"{twin} and {key.text} are one quantity (a scene gives {other} or "
+                                       f"{key.field}, not both): vary one of them")
         seen.add(key.text)
         return key, spec.strip()
 
