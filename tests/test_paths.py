@@ -627,3 +627,24 @@ def test_a_body_started_where_a_whole_power_of_x_vanishes_runs(shape):
     assert result.status is heyroll.Status.COMPLETED, result.message
     assert abs(result.energy_final - result.energy_initial) <= 1e-13 * abs(result.energy_initial)
     assert abs(float(result.final_state[0])) > 0.5  # it rolled off the hump into a well
+
+
+@pytest.mark.parametrize("track, rule", [
+    ('type = "curve"\ny = "1/x"\nx_min = -2.0\nx_max = 2.2', "track.y: has a pole between x = "),
+    ('type = "curve"\ny = "0.5*x**2 + 0.01*(x - 0.3)**-1"\nx_min = -1.0\nx_max = 1.0', "track.y: has a pole"),
+    ('type = "parametric"\nx = "u"\ny = "1/(u - 0.123456789)"\nu_min = -1.0\nu_max = 1.0', "track.y: has a pole"),
+    ('type = "parametric"\nx = "cos(u)*cos(u)"\ny = "sin(u)"\nu_min = 3.5\nu_max = 5.9', "track.u_min: the curve stops"),
+])
+def test_a_curve_with_a_pole_or_a_cusp_between_its_samples_is_refused(track, rule):
+    """The smoothness check sampled the curve: a pole the samples straddle (1/x on [-2, 2.2]: a body ran to
+    y = -778 m) or a cusp between them (x = cos^2 u, y = sin u at 3 pi/2: failed mid-run) passed (acceptance
+    test). A denominator that changes sign, or a tangent that turns back, is refused."""
+    text = f'[track]\n{track}\n[[bodies]]\nshape = "particle"\nmass = 1.0\n' + \
+        ('x = 0.9\ndx = 0.0\n' if '"curve"' in track else 'u = 0.9\ndu = 0.0\n' if 'x = "u"' in track else
+         'u = 5.0\ndu = 0.0\n')
+    with pytest.raises(SceneError) as caught:
+        heyroll.parse_scene(text)
+    assert f"{caught.value.field}: {caught.value.rule}".startswith(rule)
+    smooth = heyroll.parse_scene('[track]\ntype = "curve"\ny = "x*x/(1 + x**2)"\nx_min = -2.0\nx_max = 2.0\n'
+                                 '[[bodies]]\nshape = "particle"\nmass = 1.0\nx = 0.5\ndx = 0.0\n')
+    assert smooth.track.kind == "curve"  # a denominator that keeps its sign is no pole

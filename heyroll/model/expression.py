@@ -98,6 +98,24 @@ def parse(text: str, field: str = "track.y", variable: str = "x") -> Node:
     return node
 
 
+def denominators(node: Node):
+    """The sub-expressions a formula divides by: right sides of '/', bases of negative powers. Where one
+    changes sign on an interval the formula has a pole there (1/x on [-2, 2.2]), which samples may straddle."""
+    stack = [node]
+    while stack:
+        n = stack.pop()
+        if isinstance(n, Bin):
+            if n.op == "/":
+                yield n.right
+            elif n.op == "**" and isinstance(n.right, Num) and Decimal(n.right.text) < 0:
+                yield n.left
+            elif n.op == "**" and isinstance(n.right, Neg) and isinstance(n.right.arg, Num):
+                yield n.left
+        for child in (getattr(n, "left", None), getattr(n, "right", None), getattr(n, "arg", None)):
+            if child is not None:
+                stack.append(child)
+
+
 def _depth(node: Node) -> int:
     """Depth of an expression tree, without recursion."""
     deepest, stack = 0, [(node, 1)]

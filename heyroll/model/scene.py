@@ -560,7 +560,8 @@ class Scene:
     def describe(self) -> str:
         parts = ", ".join(b.describe() for b in self.bodies)
         turning = f", plane turning at Omega={mpmath.nstr(self.frame.omega, 6)} rad/s" if self.frame.rotating else ""
-        return (f"{self.name}: {len(self.bodies)} bodies on {self.track.describe()}{turning} ({parts}); "
+        n = len(self.bodies)
+        return (f"{self.name}: {n} bod{'y' if n == 1 else 'ies'} on {self.track.describe()}{turning} ({parts}); "
                 f"law {self.law.name} k={mpmath.nstr(self.law.restitution, 6)}")
 
 

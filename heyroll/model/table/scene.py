@@ -147,7 +147,7 @@ class TableScene:
 
     def describe(self) -> str:
         balls = ", ".join(b.body.describe() for b in self.balls)
-        return (f"{self.name}: {self.boundary.describe()}, {len(self.balls)} ball(s) [{balls}], law {self.law.name} "
+        return (f"{self.name}: {self.boundary.describe()}, {len(self.balls)} ball{'' if len(self.balls) == 1 else 's'} [{balls}], law {self.law.name} "
                 f"k={mpmath.nstr(self.law.restitution, 6)}, cushion {self.cushion.name} "
                 f"k={mpmath.nstr(self.cushion.restitution, 6)}, friction {mpmath.nstr(self.friction, 6)}")
 

@@ -74,6 +74,10 @@ class CurveTrack:
                 if bad.any():
                     raise SceneError(f"{field}.y", f"{what} is not finite at x = {xs[bad][0]:.17g} "
                                      f"(the curve must be smooth on [x_min, x_max])")
+            pole = sign_change(f, xs)
+            if pole is not None:
+                raise SceneError(f"{field}.y", f"has a pole between x = {pole[0]:.17g} and {pole[1]:.17g} (a "
+                                 "denominator changes sign there: the curve must be smooth on [x_min, x_max])")
         return track
 
     def check_grid(self) -> np.ndarray:
@@ -176,6 +180,18 @@ class CurveTrack:
         d1, d2 = self.numeric(self.df, x), self.numeric(self.d2f, x)
         w2 = 1 + d1 * d1
         return w2 * (1 - r * d2 / w2**1.5) ** 2
+
+
+def sign_change(node: ex.Node, grid: np.ndarray):
+    """(a, b), neighbours of ``grid`` between which a denominator of ``node`` changes sign (a pole the
+    samples straddle: y = 1/x on [-2, 2.2] was accepted and a body ran to y = -778 m, acceptance test), or
+    None."""
+    for den in ex.denominators(node):
+        sign = np.sign(numeric(den, grid))
+        flips = np.flatnonzero(sign[:-1] * sign[1:] < 0)
+        if flips.size:
+            return float(grid[flips[0]]), float(grid[flips[0] + 1])
+    return None
 
 
 def numeric(node: ex.Node, x) -> np.ndarray:

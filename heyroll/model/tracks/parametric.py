@@ -26,7 +26,7 @@ from .. import expression as ex
 from .._numbers import Real, is_finite, to_mpf
 from ..bodies import Body
 from .base import BodyTerms, Dynamics, heyoka_library, lagrangian_terms
-from .curve import CURVE_CHECK_POINTS, _as_expression, numeric
+from .curve import CURVE_CHECK_POINTS, _as_expression, numeric, sign_change
 
 
 @dataclass(frozen=True)
@@ -80,9 +80,18 @@ class ParametricTrack:
                 if bad.any():
                     raise SceneError(f"{field}.{'x' if 'x' in what else 'y'}",
                                      f"{what} is not finite at u = {us[bad][0]:.17g} (the curve must be smooth)")
-            speed = np.hypot(track.numeric(track.dfx, us), track.numeric(track.dfy, us))
-        if not np.all(speed > 1e-12 * max(1.0, float(np.max(speed)))):
-            n = int(np.argmin(speed))
+            for node, name in ((track.fx, "x"), (track.fy, "y")):
+                pole = sign_change(node, us)
+                if pole is not None:
+                    raise SceneError(f"{field}.{name}", f"has a pole between u = {pole[0]:.17g} and {pole[1]:.17g} "
+                                     "(a denominator changes sign there: the curve must be smooth)")
+            x1, y1 = track.numeric(track.dfx, us), track.numeric(track.dfy, us)
+            speed = np.hypot(x1, y1)
+        # a cusp between samples: |dP/du| passes through 0 and the tangent turns back (x = cos^2 u, y = sin u at
+        # u = 3 pi/2 was accepted and failed mid-run: acceptance test)
+        back = np.flatnonzero(x1[:-1] * x1[1:] + y1[:-1] * y1[1:] <= 0)
+        if not np.all(speed > 1e-12 * max(1.0, float(np.max(speed)))) or back.size:
+            n = int(back[0]) if back.size else int(np.argmin(speed))
             raise SceneError(f"{field}.u_min", f"the curve stops (|dP/du| = 0) at u = {us[n]:.17g}: a cusp or a "
                              "corner; keep [u_min, u_max] where it is regular")
         return track
