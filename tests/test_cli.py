@@ -382,3 +382,16 @@ def test_a_run_with_no_trajectory_to_draw_writes_its_summary_and_says_no_figures
     from heyroll.interfaces.outputs import _finite_or_null
 
     assert _finite_or_null({"e": [1.0, float("nan"), float("inf")], "s": "x"}) == {"e": [1.0, None, None], "s": "x"}
+
+
+def test_bad_input_found_after_the_out_directory_was_made_leaves_no_directory(tmp_path, capsys):
+    """`billiard portrait --ball 5` on a 4-ball table: exit 2, one line, and the --out it had created is gone
+    (an empty directory was left behind: acceptance test); --max-events says one rule for 0 and -5."""
+    table = str(EXAMPLE.parent / "newtons_cradle.toml")
+    out = tmp_path / "bp"
+    assert main(["billiard", "portrait", table, "--ball", "5", "--out", str(out)]) == 2
+    assert not out.exists() and capsys.readouterr().err.count("\n") == 1
+    for bad in ("0", "-5", "x"):
+        assert main(["run", "--max-events", bad, "--out", str(tmp_path / "r")]) == 2
+        assert "--max-events: must be a whole number >= 1 (or 'none')" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()

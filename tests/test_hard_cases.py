@@ -187,6 +187,7 @@ def test_inconsistent_prototype_error_policy_stops_at_the_first_flagged_collisio
     assert "collision 8 at t = " in stopped.message and "bodies 1 and 2 still approach" in stopped.message
     t = float(re.search(r"at t = ([0-9.eE+-]+):", stopped.message).group(1))
     assert t == float(stopped.times[-1]) == float(unequal_run.times[first - 1])
+    assert stopped.settings["inconsistent_collisions"] == 1  # the one that stopped it (was 0: acceptance test)
 
 
 def test_inconsistent_prototype_elastic_has_no_flagged_collision():

@@ -156,6 +156,7 @@ def main(argv: list[str] | None = None) -> int:
         print("heyroll: error: a command is required", file=sys.stderr)
         return EXIT_BAD_INPUT
     args = parser.parse_args(argv)
+    _CREATED.clear()
     try:
         if args.command == "default-scene":
             sys.stdout.write(default_scene_text())
@@ -174,6 +175,11 @@ def main(argv: list[str] | None = None) -> int:
             return _billiard_orbits(args) if args.billiard_command == "orbits" else _billiard_portrait(args)
         return _run(args)
     except SceneError as exc:
+        for created in reversed(_CREATED):  # nothing half-written: an output directory made for nothing goes
+            try:
+                created.rmdir()  # (only if empty)
+            except OSError:
+                pass
         print(f"heyroll: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:  # a Ctrl-C outside a run's own handling (loading, compiling, printing): one line
@@ -316,9 +322,12 @@ def _max_events(text):
         return ...
     if text.strip().lower() == "none":
         return None
-    n = _collision_count(text, "--max-events")
-    if n < 1:
-        raise BadInput("--max-events", f"must be >= 1 (or 'none'), got {text}")
+    try:
+        n = int(text)
+    except ValueError:
+        n = None
+    if n is None or n < 1:
+        raise BadInput("--max-events", f"must be a whole number >= 1 (or 'none'), got {text!r}")
     return n
 
 
@@ -332,10 +341,17 @@ def _out_dir(text: str) -> Path:
     return out
 
 
+#: Output directories this command created: removed again where bad input stops it before anything is written
+#: (an empty --out left behind by `billiard portrait --ball 5`: acceptance test).
+_CREATED: list = []
+
+
 def _writable(out: Path) -> None:
     """Create ``out`` and check that files can be written in it (after every other input is checked)."""
     from .outputs import writable_problem
 
+    if not out.exists():
+        _CREATED.append(out)
     problem = writable_problem(out)
     if problem:
         raise BadInput("--out", problem)

@@ -475,7 +475,8 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             "max_collisions": limit,
             "max_events": events,
             "on_inconsistent": scene.on_inconsistent,
-            "inconsistent_collisions": log.fallbacks,
+            # (with on_inconsistent = "error" the one that stopped the run counts too: it was 0 there)
+            "inconsistent_collisions": log.fallbacks + (status is Status.INCONSISTENT),
             "track_sides": scene.track_sides,
             "warnings": [log.warnings[k] for k in sorted(log.warnings)],
         },
