@@ -648,3 +648,18 @@ def test_a_curve_with_a_pole_or_a_cusp_between_its_samples_is_refused(track, rul
     smooth = heyroll.parse_scene('[track]\ntype = "curve"\ny = "x*x/(1 + x**2)"\nx_min = -2.0\nx_max = 2.0\n'
                                  '[[bodies]]\nshape = "particle"\nmass = 1.0\nx = 0.5\ndx = 0.0\n')
     assert smooth.track.kind == "curve"  # a denominator that keeps its sign is no pole
+
+
+def test_a_bowl_with_a_flat_bottom_has_one_neutral_stretch_and_no_saddle_at_its_ends(tmp_path, capsys):
+    """A concave arc, a horizontal line, a concave arc: the flat bottom is a neutral stretch; its start, where
+    h reaches 0 from the arc, was also listed as a saddle of stiffness 0 (acceptance test)."""
+    path = tmp_path / "bowl.toml"
+    path.write_text('[track]\ntype = "arcs"\nstart_x = 0.0\nstart_y = 0.0\n'
+                    '[[track.segments]]\nkind = "arc"\nradius = 2.0\nside = "concave"\nstart = -1.0\nend = 0.0\n'
+                    '[[track.segments]]\nkind = "line"\nangle = 0.0\nlength = 0.5\n'
+                    '[[track.segments]]\nkind = "arc"\nradius = 1.0\nside = "concave"\nstart = 0.0\nend = 1.3\n'
+                    '[[bodies]]\nshape = "disk"\nradius = 0.05\nmass = 1.0\ns = 0.3\nds = 2.0\n')
+    assert main(["equilibria", str(path), "--json"]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert [e["type"] for e in found] == ["neutral"]
+    assert found[0]["x_end"] - found[0]["x"] == pytest.approx(0.5, abs=1e-12)

@@ -227,6 +227,8 @@ def find_equilibria(problem: EquilibriumProblem, samples: int = BRACKET_SAMPLES)
     values = np.where(inside, 1.0, values)  # no brackets inside a neutral stretch
     roots = []
     for k in np.flatnonzero(values[:-1] * values[1:] <= 0):
+        if inside[k] or inside[k + 1]:
+            continue  # the stretch's own end (h reaches 0 there), not a root beside it: it was listed as a saddle
         a, b, fa = grid[k], grid[k + 1], values[k]
         if fa == 0:
             roots.append(a)
