@@ -549,3 +549,17 @@ def test_balls_placed_past_touching_by_round_off_collide_at_t0_in_every_precisio
     assert result.n_collisions == 1 and float(result.collision_table()["t"][0]) == 0.0
     final = np.asarray(result.state_final, dtype=float)  # (x, y, vx, vy, ux, uy) per ball: a head-on exchange
     assert final[2:4] == pytest.approx([0.0, 0.0], abs=1e-12) and final[8:10] == pytest.approx([1.0, 1.0], rel=1e-12)
+
+
+def test_a_ball_that_leaves_its_corner_is_no_longer_pinned_there():
+    """Ten balls in a rectangle (tests/data): a ball pinned in a corner that an impact sent into the table was
+    left pinned while riding nothing; when it joined a cluster again its second wall's event stayed off and the
+    cluster carried it 7e-5 m through that wall (status overlap at t = 1.161 s: random scenes)."""
+    from pathlib import Path
+
+    from heyroll.interfaces.scene_file import load_scene
+
+    result = simulate(load_scene(Path(__file__).parent / "data" / "corner_cluster_rectangle.toml"),
+                              t_end=2.0)
+    assert result.status is Status.COMPLETED, result.message
+    assert float(result.t_final) == 2.0

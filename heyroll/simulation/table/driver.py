@@ -933,7 +933,7 @@ class _Run:
     def lift(self, k: int) -> None:
         """Skidding rider k lifts off its cushion (the cushion's normal force fell to zero): friction draws it
         into the table faster than the curve turns it. It slides freely from now, its wall event on again."""
-        self.riding[k] = False
+        self.riding[k], self.pinned[k] = False, None
         self.lifted[k] = self.t
         self.set_mode(k)
 
@@ -1589,7 +1589,9 @@ class _Run:
                     self.ride(k, record=moved)
                     changed = changed or moved
             elif into < self.zero:
-                self.riding[k] = False
+                # (out of its corner too: left pinned while riding nothing, its second wall's event stayed off when
+                # it joined a cluster again, which carried it 7e-5 m through that wall: random scenes)
+                self.riding[k], self.pinned[k] = False, None
                 self.set_mode(k)
                 changed = True
         return changed
