@@ -563,3 +563,18 @@ def test_a_ball_that_leaves_its_corner_is_no_longer_pinned_there():
                               t_end=2.0)
     assert result.status is Status.COMPLETED, result.message
     assert float(result.t_final) == 2.0
+
+
+@pytest.mark.parametrize("precision", ["double", "long", "quad"])
+def test_a_ball_on_the_rail_and_one_touching_it_start_alike_in_every_precision(precision):
+    """Ball 2 written exactly on a circular cushion (x = R - r = 0.9, a double 2.2e-17 m past it: refused
+    before, now within the slack) and ball 1 written 3.9e-16 m past touching ball 2: the start moved ball 2
+    along the line of centres, through the rail (quad: overlap at t = 0, review). Now a ball on a cushion is
+    put onto it and its neighbour moves instead."""
+    text = ('[track]\ntype = "table"\nboundary = "circle"\nradius = 1.0\n'
+            '[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nx = 0.7000000000000003\ny = 0.0\nvx = -1.0\n'
+            '[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nx = 0.9\ny = 0.0\n[run]\nt_end = 2.0\n')
+    result = simulate(parse_scene(text), precision=precision)
+    assert result.status is Status.COMPLETED, result.message
+    x2 = float(result.state_final[6])
+    assert x2 <= 0.9 + 1e-15

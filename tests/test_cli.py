@@ -391,6 +391,9 @@ def test_bad_input_found_after_the_out_directory_was_made_leaves_no_directory(tm
     out = tmp_path / "bp"
     assert main(["billiard", "portrait", table, "--ball", "5", "--out", str(out)]) == 2
     assert not out.exists() and capsys.readouterr().err.count("\n") == 1
+    nested = tmp_path / "nest" / "a" / "b"  # every directory it made goes, not only the innermost (review)
+    assert main(["billiard", "portrait", table, "--ball", "5", "--out", str(nested)]) == 2
+    assert not (tmp_path / "nest").exists()
     for bad in ("0", "-5", "x"):
         assert main(["run", "--max-events", bad, "--out", str(tmp_path / "r")]) == 2
         assert "--max-events: must be a whole number >= 1 (or 'none')" in capsys.readouterr().err

@@ -1137,3 +1137,20 @@ def test_a_circle_cluster_splits_where_the_same_scene_on_one_arc_splits(name):
     spans = lambda r: [(c["t_start"], c["t_end"]) for c in r.contact_intervals]  # noqa: E731
     assert len(spans(circle)) == len(spans(reference)) >= 2
     assert np.allclose(spans(circle), spans(reference), rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("precision", ["double", "long", "quad"])
+def test_a_cradle_placed_at_the_doubles_nearest_touching_runs_alike_in_every_precision(precision):
+    """Five balls on a circle, four at the doubles nearest to touching (gaps of either sign, ~4e-17 rad): in long and
+    quad a positive gap beyond the settler's band was a real one, and the pressed stack chattered at k = 1
+    every 1e-8 s (max_collisions at t = 3.7e-7 s: review). The start closes gaps within the slack of either
+    sign: every precision ends like double, 3 collisions by t = 3 s."""
+    with mpmath.workdps(50):
+        beta = 2 * mpmath.asin(mpmath.mpf("0.1") / mpmath.mpf("0.9"))
+        places = [-1.0, 0.3] + [float(mpmath.mpf("0.3") + j * beta) for j in (1, 2, 3)]
+    text = '[track]\ntype = "circle"\nradius = 1.0\n' + "".join(
+        f'[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nphi = {p!r}\ndphi = {v}\n'
+        for p, v in zip(places, (3.0, 0, 0, 0, 0)))
+    result = heyroll.simulate(parse_scene(text + '[collision]\nlaw = "newton"\nrestitution = 1.0\n[run]\nt_end = 3.0\n'),
+                              max_collisions=40, precision=precision)
+    assert result.status is Status.COMPLETED and result.n_collisions == 3, result.message

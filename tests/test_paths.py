@@ -633,7 +633,7 @@ def test_a_body_started_where_a_whole_power_of_x_vanishes_runs(shape):
     ('type = "curve"\ny = "1/x"\nx_min = -2.0\nx_max = 2.2', "track.y: has a pole between x = "),
     ('type = "curve"\ny = "0.5*x**2 + 0.01*(x - 0.3)**-1"\nx_min = -1.0\nx_max = 1.0', "track.y: has a pole"),
     ('type = "parametric"\nx = "u"\ny = "1/(u - 0.123456789)"\nu_min = -1.0\nu_max = 1.0', "track.y: has a pole"),
-    ('type = "parametric"\nx = "cos(u)*cos(u)"\ny = "sin(u)"\nu_min = 3.5\nu_max = 5.9', "track.u_min: the curve stops"),
+    ('type = "parametric"\nx = "cos(u)*cos(u)"\ny = "sin(u)"\nu_min = 3.5\nu_max = 5.9', "track.u_min: the tangent turns back between u = "),
 ])
 def test_a_curve_with_a_pole_or_a_cusp_between_its_samples_is_refused(track, rule):
     """The smoothness check sampled the curve: a pole the samples straddle (1/x on [-2, 2.2]: a body ran to
@@ -663,3 +663,33 @@ def test_a_bowl_with_a_flat_bottom_has_one_neutral_stretch_and_no_saddle_at_its_
     found = json.loads(capsys.readouterr().out)
     assert [e["type"] for e in found] == ["neutral"]
     assert found[0]["x_end"] - found[0]["x"] == pytest.approx(0.5, abs=1e-12)
+
+
+@pytest.mark.parametrize("precision", ["double", "long", "quad"])
+def test_bodies_placed_past_touching_high_on_a_curve_collide_in_every_precision(precision):
+    """Two disks on y = x^2/2 + 200, the second placed past touching by half the scene's slack (2^-48 of the
+    centres' coordinates, ~3.6e-13 m here): the start's repair measured its slack against the track coordinate
+    x (~1), so it moved nothing and even double ended overlap (review). Now the slack is the scene's."""
+    from heyroll.model._numbers import touching_slack
+
+    with mpmath.workdps(40):
+        r = mpmath.mpf("0.1")
+
+        def centre(x):
+            n = mpmath.sqrt(1 + x * x)
+            return x - r * x / n, x * x / 2 + 200 + r / n
+
+        def gap(x2):
+            a, b = centre(mpmath.mpf("-0.6")), centre(x2)
+            return mpmath.hypot(b[0] - a[0], b[1] - a[1]) - 2 * r
+
+        touching = mpmath.findroot(gap, mpmath.mpf("-0.4"))
+        slack = touching_slack(*centre(mpmath.mpf("-0.6")), *centre(touching))
+        x2 = float(touching - slack / 2 / mpmath.diff(gap, touching))
+    text = ('[track]\ntype = "curve"\ny = "x**2/2 + 200"\nx_min = -1.5\nx_max = 1.5\n'
+            '[[bodies]]\nshape = "disk"\nradius = 0.1\nmass = 1.0\nx = -0.6\ndx = 0.0\n'
+            f'[[bodies]]\nshape = "disk"\nradius = 0.1\nmass = 1.0\nx = {x2!r}\ndx = -1.0\n'
+            '[collision]\nlaw = "newton"\nrestitution = 1.0\n[run]\nt_end = 2.0\n')
+    result = heyroll.simulate(heyroll.parse_scene(text), precision=precision)
+    assert result.status is heyroll.Status.COMPLETED and result.n_collisions == 2, result.message
+    assert float(result.times[0]) == 0.0

@@ -762,3 +762,17 @@ def test_a_body_leaves_a_one_sided_track_where_it_passes_onto_a_hump_too_sharp_f
     result = simulate(scene, t_end=0.5)
     assert result.status.value == "left_track" and "N < 0 at s = 1," in result.message
     assert float(result.final_state[0]) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_a_cluster_leaves_a_one_sided_track_where_a_member_passes_onto_a_hump_too_sharp():
+    """A sphere pressing a disk (a cluster) down a one-sided line into a convex arc of radius 0.5 at 3.4 m/s:
+    N < 0 for the disk as it passes the junction (t = 0.1249 s). The junction check skipped cluster members and
+    the disk rode the hump; the run stopped later, naming the sphere (review)."""
+    scene = parse_scene('[track]\ntype = "arcs"\nstart_x = 0.0\nstart_y = 0.0\nsides = "one"\n'
+                        '[[track.segments]]\nkind = "line"\nangle = -0.5\nlength = 1.0\n'
+                        '[[track.segments]]\nkind = "arc"\nradius = 0.5\nside = "convex"\nstart = 0.5\nend = 1.5\n'
+                        '[[bodies]]\nshape = "solid_sphere"\nradius = 0.05\nmass = 1.0\ns = 0.5\nds = 3.0\n'
+                        '[[bodies]]\nshape = "disk"\nradius = 0.05\nmass = 1.0\ns = 0.6\nds = 3.0\n[run]\nt_end = 0.4\n')
+    result = simulate(scene)
+    assert result.status.value == "left_track" and result.message.startswith("body 2 cannot stay")
+    assert float(result.t_final) == pytest.approx(0.1249, abs=1e-4)

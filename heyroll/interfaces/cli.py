@@ -175,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
             return _billiard_orbits(args) if args.billiard_command == "orbits" else _billiard_portrait(args)
         return _run(args)
     except SceneError as exc:
-        for created in reversed(_CREATED):  # nothing half-written: an output directory made for nothing goes
+        for created in _CREATED:  # nothing half-written: output directories made for nothing go, innermost first
             try:
                 created.rmdir()  # (only if empty)
             except OSError:
@@ -350,8 +350,10 @@ def _writable(out: Path) -> None:
     """Create ``out`` and check that files can be written in it (after every other input is checked)."""
     from .outputs import writable_problem
 
-    if not out.exists():
-        _CREATED.append(out)
+    missing = out
+    while not missing.exists() and missing != missing.parent:  # the directories it will make, innermost first
+        _CREATED.append(missing)
+        missing = missing.parent
     problem = writable_problem(out)
     if problem:
         raise BadInput("--out", problem)

@@ -110,8 +110,12 @@ class TableScene:
                 self.boundary.check_ball(ball.body.radius, f"{field}.radius")
                 within = getattr(self.boundary, "within", None)
                 for w, c in enumerate(self.boundary.wall_constants(ball.body.radius)):
-                    # a ball exactly at its curve's point (touching) passes: the 256-bit gap's round-off
-                    if self.boundary.gap(w, ball.x, ball.y, c) > mpmath.mpf(2) ** -200 or \
+                    # a ball exactly at its curve's point (touching) passes, and one past it by the slack of places
+                    # written as doubles (x = R - r = 0.9 lies 2.2e-17 m past: refused, review): the distance is
+                    # the gap over its gradient's length
+                    gx, gy = self.boundary.gradient(w, ball.x, ball.y, c)
+                    past = touching_slack(ball.x, ball.y) * mpmath.sqrt(gx * gx + gy * gy) + mpmath.mpf(2) ** -200
+                    if self.boundary.gap(w, ball.x, ball.y, c) > past or \
                             (within is not None and not within(ball.x, ball.y)):
                         raise SceneError(f"{field}.x", f"the ball overlaps the cushion or is outside the table (its centre "
                                                        f"({mpmath.nstr(ball.x, 8)}, {mpmath.nstr(ball.y, 8)}) is beyond "

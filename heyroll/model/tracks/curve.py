@@ -77,7 +77,8 @@ class CurveTrack:
             pole = sign_change(f, xs)
             if pole is not None:
                 raise SceneError(f"{field}.y", f"has a pole between x = {pole[0]:.17g} and {pole[1]:.17g} (a "
-                                 "denominator changes sign there: the curve must be smooth on [x_min, x_max])")
+                                 "denominator changes sign there; a 0/0 such as sin(x)/x must be written without "
+                                 "the division: the curve must be smooth on [x_min, x_max])")
         return track
 
     def check_grid(self) -> np.ndarray:

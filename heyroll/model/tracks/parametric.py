@@ -84,16 +84,22 @@ class ParametricTrack:
                 pole = sign_change(node, us)
                 if pole is not None:
                     raise SceneError(f"{field}.{name}", f"has a pole between u = {pole[0]:.17g} and {pole[1]:.17g} "
-                                     "(a denominator changes sign there: the curve must be smooth)")
+                                     "(a denominator changes sign there; a 0/0 must be written without the division: "
+                                     "the curve must be smooth)")
             x1, y1 = track.numeric(track.dfx, us), track.numeric(track.dfy, us)
             speed = np.hypot(x1, y1)
         # a cusp between samples: |dP/du| passes through 0 and the tangent turns back (x = cos^2 u, y = sin u at
         # u = 3 pi/2 was accepted and failed mid-run: acceptance test)
         back = np.flatnonzero(x1[:-1] * x1[1:] + y1[:-1] * y1[1:] <= 0)
-        if not np.all(speed > 1e-12 * max(1.0, float(np.max(speed)))) or back.size:
-            n = int(back[0]) if back.size else int(np.argmin(speed))
+        if not np.all(speed > 1e-12 * max(1.0, float(np.max(speed)))):
+            n = int(np.argmin(speed))
             raise SceneError(f"{field}.u_min", f"the curve stops (|dP/du| = 0) at u = {us[n]:.17g}: a cusp or a "
                              "corner; keep [u_min, u_max] where it is regular")
+        if back.size:
+            n = int(back[0])
+            raise SceneError(f"{field}.u_min", f"the tangent turns back between u = {us[n]:.17g} and "
+                             f"{us[n + 1]:.17g}: a cusp (|dP/du| = 0), or the curve turns more than a quarter turn "
+                             f"between the check's {CURVE_CHECK_POINTS} samples (a shorter [u_min, u_max])")
         return track
 
     def check_grid(self) -> np.ndarray:

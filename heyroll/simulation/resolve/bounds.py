@@ -77,7 +77,8 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
     upper = event.end == "upper"
     step = 1 if upper else -1
     stop = log.stop
-    one_sided = scene.track_sides == "one" and function is not None and not in_cluster
+    # (a cluster's members too: its left_track events watch each member's N as well, review)
+    one_sided = scene.track_sides == "one" and function is not None
 
     def after_junction(ta, s, pars, t) -> bool:
         """The reaction jumps with the curvature at a junction, and the events that watch its sign (a one-sided

@@ -303,14 +303,21 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
         return True
 
     def close_start(s) -> None:
-        """As the circle's (events.contact_settler): pairs started past touching within the scene's slack
-        are moved to touching in the run's type (Newton steps on the second body's coordinate)."""
+        """As the circle's (events.contact_settler): pairs that start touching to within the scene's slack
+        (model.touching_slack, of the centres' coordinates, as the scene checks it: scaled by the track
+        coordinates, a bowl of radius 100 m accepted 1e-14 m and ended overlap, review) but beyond the
+        settler's band are moved to touching in the run's type (Newton steps on the second body's coordinate)."""
         if function is None:
             return
         for number, (a, b) in enumerate(where):
+            pair = system.contacts[number].pair
+            centres = [abs(float(c)) for k, q in ((pair.i, s[a]), (pair.j, s[b]))
+                       for c in scene.track.centre(scene.bodies[k], float(q))]
+            slack = TOUCHING_SLACK * max([1.0] + centres)
+            band = RESOLUTION_ULPS * eps * (1 + abs(float(s[a])) + abs(float(s[b])))
             for _ in range(3):
                 gap, _gi, gj = values(s, number)[:3]
-                if not (gap < 0 and -gap <= TOUCHING_SLACK * (1 + abs(s[a]) + abs(s[b])) and gj > 0):
+                if not (band < abs(float(gap)) <= slack and gj > 0):
                     break
                 s[b] = s[b] - gap / gj
 

@@ -177,18 +177,40 @@ class _Run:
 
     # -- the loop ------------------------------------------------------------------------------
     def close_start(self) -> None:
-        """Balls placed past touching by no more than the scene accepts (model.touching_slack: places written
-        as doubles) are moved to touching in the run's type, the second ball along the line of centres: in long,
-        quad or MPFR such an overlap is far beyond the contact tolerance (measured: status overlap at t = 0)."""
+        """Balls that start touching a cushion or each other to within the scene's slack (model.touching_slack:
+        places written as doubles) but beyond the contact tolerance are moved to touching in the run's type: in
+        long, quad or MPFR the tolerance is far below a double's rounding (measured: status overlap at t = 0). In
+        double the tolerance covers the slack: nothing moves. A ball is put onto its cushion along the normal; of
+        two balls, the one not on a cushion moves along the line of centres (moving the other pushed a ball of a
+        rack through the rail: review)."""
+        touch = float(self.geometry.touch)
+
+        def slack(*balls) -> float:
+            return TOUCHING_SLACK * max([1.0] + [abs(float(self.state[STATE_PER_BALL * k + m])) for k in balls
+                                                 for m in (0, 1)])
+
+        def on_cushion(k) -> bool:
+            s = STATE_PER_BALL * k
+            return any(float(self.geometry.wall(k, w, self.state[s], self.state[s + 1])[0]) <= touch + slack(k)
+                       for (b, w) in self.system.walls if b == k)
+
+        for (k, w) in self.system.walls:
+            s = STATE_PER_BALL * k
+            distance, (nx, ny) = self.geometry.wall(k, w, self.state[s], self.state[s + 1])
+            if touch < abs(float(distance)) <= slack(k):
+                self.state[s], self.state[s + 1] = self.state[s] + distance * nx, self.state[s + 1] + distance * ny
         n = self.system.n_balls
         for i in range(n):
             for j in range(i + 1, n):
-                si, sj = STATE_PER_BALL * i, STATE_PER_BALL * j
                 distance, (nx, ny) = self.geometry.pair(i, j, self.state)
-                size = max(1, *(abs(float(self.state[c])) for c in (si, si + 1, sj, sj + 1)))
-                if distance < self.zero and -float(distance) <= TOUCHING_SLACK * size:
-                    self.state[sj] = self.state[sj] - distance * nx
-                    self.state[sj + 1] = self.state[sj + 1] - distance * ny
+                if not touch < abs(float(distance)) <= slack(i, j):
+                    continue
+                if not on_cushion(j):
+                    sj = STATE_PER_BALL * j
+                    self.state[sj], self.state[sj + 1] = self.state[sj] - distance * nx, self.state[sj + 1] - distance * ny
+                elif not on_cushion(i):
+                    si = STATE_PER_BALL * i
+                    self.state[si], self.state[si + 1] = self.state[si] + distance * nx, self.state[si + 1] + distance * ny
 
     def loop(self) -> None:
         if self.limit == 0:
