@@ -180,7 +180,11 @@ def test_an_io_error_while_writing_leaves_no_half_written_set(tmp_path, capsys, 
     assert main(["run", "--out", str(out), "--t-end", "2", "--no-figures", "--progress", "off"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "No space left on device" in err[0]
-    assert list(out.iterdir()) == []
+    assert not out.exists()  # its partial outputs removed, and the directory the run made for them
+    kept = tmp_path / "kept"  # a directory that was there before stays, empty
+    kept.mkdir()
+    assert main(["run", "--out", str(kept), "--t-end", "2", "--no-figures", "--progress", "off"]) == 2
+    assert list(kept.iterdir()) == []
 
 
 def test_no_command_prints_the_usage_and_exits_2(capsys):

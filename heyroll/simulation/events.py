@@ -1097,7 +1097,8 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
             if RESOLUTION_ULPS * eps * scale < abs(g) <= TOUCHING_SLACK * scale:
                 s[b] = s[b] - g
 
-    settle.close_start = close_start
+    # (in double the band covers the slack at every scale: nothing to move, and nothing spent on every run's start)
+    settle.close_start = close_start if RESOLUTION_ULPS * eps < TOUCHING_SLACK else None
     settle.lift_gap = lift_gap  # for a gap rising through zero (reopening_check)
     # settle(s, t, every unit) leaves s as it is and returns True where no pair touches (the band of
     # touching_elsewhere is the widest settle looks at): the driver skips it at such a mode's start
