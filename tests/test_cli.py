@@ -402,3 +402,20 @@ def test_bad_input_found_after_the_out_directory_was_made_leaves_no_directory(tm
         assert main(["run", "--max-events", bad, "--out", str(tmp_path / "r")]) == 2
         assert "--max-events: must be a whole number >= 1 (or 'none')" in capsys.readouterr().err
     assert not (tmp_path / "r").exists()
+
+
+def test_a_forced_run_draws_its_stroboscopic_section_from_the_whole_run(tmp_path, monkeypatch):
+    """The path-track figures come from a dense re-run cut at FIGURE_COLLISIONS collisions; the stroboscopic
+    section came from it too, and a forced run with more collisions than that before its first sample wrote no
+    stroboscopic.png (acceptance test: 1756 collisions, 7 samples). It is the whole run's now."""
+    from heyroll.interfaces import figures
+
+    monkeypatch.setattr(figures, "FIGURE_COLLISIONS", 0)  # the re-run stops at its first collision
+    scene = tmp_path / "forced.toml"  # two balls meet at ~0.5 s, before the first sample (nu t + psi = 2 pi: 1.64 s)
+    scene.write_text('[track]\ntype = "circle"\nradius = 1.0\n' + "".join(
+        f'[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nphi = {p}\ndphi = 0.0\n' for p in ("-0.5", "0.5"))
+        + '[forcing]\nkind = "force"\namplitude = 0.5\nfrequency = 2.0\nphase = 3.0\n')
+    out = tmp_path / "o"
+    assert main(["run", str(scene), "--t-end", "8", "--out", str(out), "--progress", "off"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["files"]["stroboscopic_figure"] == "stroboscopic.png" and (out / "stroboscopic.png").is_file()

@@ -776,3 +776,34 @@ def test_a_cluster_leaves_a_one_sided_track_where_a_member_passes_onto_a_hump_to
     result = simulate(scene)
     assert result.status.value == "left_track" and result.message.startswith("body 2 cannot stay")
     assert float(result.t_final) == pytest.approx(0.1249, abs=1e-4)
+
+
+def test_a_collision_rows_energy_counts_the_slip_of_a_body_sliding_elsewhere():
+    """Bodies 1 and 2 collide while body 3 slides elsewhere (started with a slip): the row's energies left out
+    body 3's slip energy (15.97 J where the scene held 15.27 J: acceptance test). Each row's energy_before is
+    the energy of the run stopped at that instant."""
+    text = ('[track]\ntype = "circle"\nradius = 1.0\nfriction = 0.1\n'
+            + "".join(f'[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nphi = {p}\ndphi = {v}\n{extra}'
+                      for p, v, extra in (("-0.5", "1.0", ""), ("0.3", "-1.0", ""), ("2.0", "0.0", "slip = 1.0\n")))
+            + '[collision]\nlaw = "hedrih"\nrestitution = 1.0\n[run]\nt_end = 0.6\n')
+    scene = parse_scene(text)
+    table = simulate(scene).collision_table()
+    assert table.size == 2
+    for row in table:
+        at = simulate(scene, t_end=float(row["t"]))  # (k = 1: the impact itself keeps the energy)
+        assert row["energy_before"] == pytest.approx(at.energy_final, rel=1e-12)
+
+
+def test_mirror_images_start_to_slip_together():
+    """Two solid spheres at phi = -+0.2 moving apart at -+3 rad/s on a rough circle reach mu_s N at one
+    instant: one event fired and the other's root lay at the start of the next step, unseen; body 2 rolled on
+    needing more friction than mu N (acceptance test). Both slip at t = 0.19024 s, as each alone does."""
+    def scene(bodies):
+        return parse_scene('[track]\ntype = "circle"\nradius = 1.0\nfriction = 0.15\n' + "".join(
+            f'[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nphi = {p}\ndphi = {v}\n' for p, v in bodies)
+            + '[run]\nt_end = 0.6\n')
+
+    both = simulate(scene([("-0.2", "-3.0"), ("0.2", "3.0")])).transition_table()
+    alone = simulate(scene([("0.2", "3.0")])).transition_table()
+    assert [(int(r["body"]), str(r["to"])) for r in both[:2]] == [(1, "sliding+"), (2, "sliding-")]
+    assert both["t"][0] == both["t"][1] == alone["t"][0]

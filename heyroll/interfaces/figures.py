@@ -208,6 +208,6 @@ def run_figures(result: SimulationResult, out_dir: Path) -> dict:
     if rough:
         from .friction_figures import friction_figures
 
-        files.update(friction_figures(dense, out_dir))
+        files.update(friction_figures(dense, out_dir, whole=result))
     return files
 

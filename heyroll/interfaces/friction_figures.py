@@ -63,8 +63,12 @@ GRID_Q, GRID_V = 320, 220
 ENERGY_LEVELS = 24
 
 
-def friction_figures(result: SimulationResult, out_dir) -> dict[str, str]:
+def friction_figures(result: SimulationResult, out_dir, whole: SimulationResult | None = None) -> dict[str, str]:
     """Write friction_portrait.png, friction_energy.png (and stroboscopic.png) into ``out_dir``.
+
+    ``whole``: the complete run, where ``result`` is its dense re-run up to a few dozen collisions (the
+    stroboscopic section and the impact map are the whole run's: cut at the 60th collision, a forced run
+    with more before its first period drew no stroboscopic.png, acceptance test). Default: ``result``.
 
     Returns {name: file name in out_dir}: keys "friction_portrait", "friction_energy" and,
     for a forced run (``result.scene.forcing is not None``) with stroboscopic samples,
@@ -78,11 +82,12 @@ def friction_figures(result: SimulationResult, out_dir) -> dict[str, str]:
     files["friction_portrait"] = "friction_portrait.png"
     friction_energy_figure(result, out / "friction_energy.png")
     files["friction_energy"] = "friction_energy.png"
-    if result.scene.forcing is not None and _strobe(result).shape[0] > 0:
-        stroboscopic_figure(result, out / "stroboscopic.png")
+    whole = result if whole is None else whole
+    if whole.scene.forcing is not None and _strobe(whole).shape[0] > 0:
+        stroboscopic_figure(whole, out / "stroboscopic.png")
         files["stroboscopic_figure"] = "stroboscopic.png"
-    if result.scene.forcing is not None and _impacts(result)[0].size:
-        impact_map_figure(result, out / "impact_map.png")
+    if whole.scene.forcing is not None and _impacts(whole)[0].size:
+        impact_map_figure(whole, out / "impact_map.png")
         files["impact_map"] = "impact_map.png"
     return files
 

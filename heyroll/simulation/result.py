@@ -209,7 +209,11 @@ def build_collision_table(
     if scene.rough and spins is not None:
         # A slipping body's kinetic energy is 1/2 m v^2 + 1/2 m (kappa - 1) u^2, not the rolling
         # 1/2 kappa m v^2: the difference, with its spin's u unchanged through the impact.
-        spins = np.asarray(spins, dtype=float).reshape(n, 2)
+        spins = np.asarray(spins, dtype=float).reshape(n, -1)
+        if spins.shape[1] > 2:  # the other bodies' slip energy, unchanged by the impact
+            others = [number(float(e)) for e in spins[:, 2]]
+            for name in ("energy_before", "energy_after"):
+                table[name] = table[name] + np.array(others, dtype=table[name].dtype)
         for side, idx, col in (("i", i, 0), ("j", j, 1)):
             for r in np.flatnonzero(~np.isnan(spins[:, col])):
                 k = int(idx[r])
@@ -305,7 +309,8 @@ class SimulationResult:
     #: (see transition_table); each body's mode and slip velocity w (m/s) at the end.
     transitions: tuple = ()
     #: Rough tracks: per kept collision the modes of bodies i and j before and after it (MODE_COLUMNS),
-    #: and the speeds u_i, u_j their spins roll at where they slip (nan: rolling; the table's energies).
+    #: the speeds u_i, u_j their spins roll at where they slip (nan: rolling) and the other bodies' slip
+    #: energy (the table's energies).
     collision_modes: np.ndarray | None = None
     collision_spins: np.ndarray | None = None
     final_modes: tuple = ()

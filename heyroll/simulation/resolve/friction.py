@@ -238,10 +238,33 @@ class FrictionModes:
             self.apply(ta, block, new)
             self._note(t, s, block, new)
             self.log.friction_transitions += 1
+            if kind not in ("turn", "reroll"):
+                self._onsets_at(ta, s, t, b)
             self.settle(ta, s, t)  # units turning at the same instant (bodies moving together)
             return not self.log.events_exhausted()
 
         return on_event
+
+    def _onsets_at(self, ta, s, t, fired: int) -> None:
+        """Units whose load reaches static friction's capacity at the same instant as unit ``fired`` (mirror
+        images: two bodies at phi = -+0.2 reach it together): their events' roots lie at the start of the next
+        step, where heyoka does not see them, and one of the two rolled on needing more than mu_s N
+        (acceptance test). A unit at its capacity to within round-off slides from here, as its event would
+        have made it."""
+        for b, block in enumerate(self.system.friction_blocks):
+            if b == fired or block_mode(self.system, block, self.holder[1]) not in ("stuck", "rolling"):
+                continue
+            values = self._evaluate(s, t)
+            load, capacity = values[BLOCK_VALUES * b], values[BLOCK_VALUES * b + 1]
+            guard = RESOLUTION_ULPS * self.eps * self.weights[b] * abs(float(values[BLOCK_VALUES * b + 2]))
+            if abs(float(capacity)) <= guard or abs(load) < abs(capacity) - guard:
+                continue
+            direction = 1 if load > 0 else -1
+            new = "sliding+" if direction > 0 else "sliding-"
+            self._start_moving(s, block, direction)
+            self.apply(ta, block, new)
+            self._note(t, s, block, new)
+            self.log.friction_transitions += 1
 
     def settle(self, ta, s, t) -> None:
         """Units whose turning point (q' = 0, or a slip w = 0) is nearer than the run's time
@@ -296,11 +319,14 @@ class FrictionModes:
                     self._note(t, s, block, new)
                     self.log.friction_transitions += 1
 
-    def spins(self, before, t, was) -> list:
-        """Per body: u = sigma q' - w, the speed its spin rolls at, where it slipped in state
-        ``before`` (modes ``was``); nan where it rolled. An impulse through a slipping body's centre
-        leaves u: the collision table's energies count it (result.build_collision_table)."""
-        out = [float("nan")] * len(self.scene.bodies)
+    def spins(self, before, t, was) -> tuple:
+        """(per body u = sigma q' - w, the speed its spin rolls at, where it slipped in state ``before``
+        (modes ``was``), nan where it rolled; per body the energy its slip adds to its rolling energy,
+        1/2 m (kappa - 1) (u^2 - v^2), v = sigma q', 0 where it rolled). An impulse through a slipping
+        body's centre leaves u: the collision table's energies count it for the bodies of the impact, and
+        the others' slip energies as they are (result.build_collision_table)."""
+        n = len(self.scene.bodies)
+        out, energies = [float("nan")] * n, [0.0] * n
         values = None
         for b, block in enumerate(self.system.friction_blocks):
             k = block.members[0]
@@ -309,8 +335,11 @@ class FrictionModes:
             if values is None:
                 values = self._evaluate(np.asarray(before), t)
             sigma = float(values[BLOCK_VALUES * b + 2])
-            out[k] = sigma * float(before[block.rate]) - float(before[block.slip])
-        return out
+            v = sigma * float(before[block.rate])
+            out[k] = v - float(before[block.slip])
+            body = self.scene.bodies[k]
+            energies[k] = 0.5 * float(body.mass) * (float(body.kappa) - 1) * (out[k] * out[k] - v * v)
+        return out, energies
 
     def begin(self, before) -> None:
         """An impact's callback starts: ``before`` is the state (rates, slips) before it."""
