@@ -103,3 +103,26 @@ def test_a_run_inside_a_run_takes_its_own_log():
     outer = heyroll.simulate(sc, t_end=2000.0, progress=progress)
     assert inner and _same(outer, alone)
     assert set(inner) == {heyroll.simulate(sc, t_end=50.0).n_collisions}
+
+
+def test_the_cyclic_collector_is_paused_during_a_run_and_restored_after():
+    """A run pauses Python's cyclic garbage collector (its passes over the growing records cost a tenth of a
+    long run: validation/speed.py) and leaves it as it found it, on or off, also when the run raises."""
+    import gc
+
+    import heyroll
+
+    seen = []
+    scene = heyroll.default_scene()
+    for enabled in (True, False):
+        (gc.enable if enabled else gc.disable)()
+        try:
+            heyroll.simulate(scene, t_end=2.0, progress=lambda t, n: seen.append(gc.isenabled()))
+            assert gc.isenabled() is enabled and seen and not any(seen)
+            try:
+                heyroll.simulate(scene, t_end=2.0, progress=lambda t, n: 1 / 0)
+            except ZeroDivisionError:
+                pass
+            assert gc.isenabled() is enabled
+        finally:
+            gc.enable()

@@ -27,7 +27,6 @@ measures the largest difference.
 
 from __future__ import annotations
 
-import gc
 import time
 from dataclasses import dataclass, field
 
@@ -37,7 +36,8 @@ import numpy as np
 from ..model.table import is_table
 from .compiled_cache import CompiledCache
 from .driver import (
-    HANDLER_SETS, STEP_CHUNK, ModeChange, RunOptions, _handlers, _overlap, _start, final_status, motion_time_scale,
+    HANDLER_SETS, STEP_CHUNK, ModeChange, RunOptions, _collector_paused, _handlers, _overlap, _start, final_status,
+    motion_time_scale,
     records_to_arrays, run_limits, simulate,
 )
 from .events import CollisionLog
@@ -170,9 +170,7 @@ def _run_group(scenes, numbers, options, width, cooldown, results) -> None:
         running[index] = None
         targets[index] = ta.time[index]
 
-    gc_was_enabled = gc.isenabled()
-    gc.disable()  # as in a scalar run (driver._propagate): the logs grow by small lists, no cycles
-    try:
+    with _collector_paused():  # as a scalar run: the logs grow by small lists, no cycles
         for index in range(width):
             hi, lo = (np.array(a) for a in ta.dtime)
             load(index)
@@ -197,9 +195,6 @@ def _run_group(scenes, numbers, options, width, cooldown, results) -> None:
                     results[numbers[k]] = _scalar(scenes[k], options,
                                                   f"the batch run stopped ({stop or outcome!s})")
                 load(index)
-    finally:
-        if gc_was_enabled:
-            gc.enable()
 
 
 def _load(scene, number, index, ta, slots, options, log):

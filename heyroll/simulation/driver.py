@@ -190,16 +190,34 @@ def simulate(
 
 
 def _simulate(scene: Scene, opts: RunOptions, sink, progress) -> SimulationResult:
-    if is_table(scene):  # billiards: balls on a table (paper section 7)
-        from .table.driver import simulate_table
+    with _collector_paused():
+        if is_table(scene):  # billiards: balls on a table (paper section 7)
+            from .table.driver import simulate_table
 
-        return simulate_table(scene, opts, sink, progress)
-    _, _, events, collision_limit = run_limits(scene, opts)
-    log = _take_log(collision_limit, events, [] if scene.rough else None)
+            return simulate_table(scene, opts, sink, progress)
+        _, _, events, collision_limit = run_limits(scene, opts)
+        log = _take_log(collision_limit, events, [] if scene.rough else None)
+        try:
+            return _run(scene, opts, sink, progress, log)
+        finally:
+            _RUN_LOGS.free.append(log)
+
+
+@contextlib.contextmanager
+def _collector_paused():
+    """Python's cyclic garbage collector is paused while a run integrates, and restored after. Each
+    collision's record (a tuple holding a list) is an object the collector tracks, and its passes over a
+    growing list of them, in the integration and in turning the records into arrays after it, cost a
+    tenth of a long run (measured on the default scene, 93,594 collisions: 9.1e4 collisions/s with it on
+    outside the integration, 1.02e5 with it paused throughout). Reference counting still frees everything a
+    run drops (it makes no reference cycles per collision)."""
+    was = gc.isenabled()
+    gc.disable()
     try:
-        return _run(scene, opts, sink, progress, log)
+        yield
     finally:
-        _RUN_LOGS.free.append(log)
+        if was:
+            gc.enable()
 
 
 #: Each thread's logs free for a run (a run inside a run, from a progress callback or a sink, takes another).
@@ -512,11 +530,7 @@ def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None):
     ``optimized(ta)``: for a quickly compiled integrator, the optimized one
     that takes over, in the same state, after QUICK_STEPS steps.
     """
-    # The log grows by one small list per collision: the cyclic garbage
-    # collector would rescan it again and again, for nothing (no cycles).
-    gc_was_enabled = gc.isenabled()
-    gc.disable()
-    steps = 0
+    steps = 0  # (the cyclic garbage collector is paused for the whole run: _collector_paused)
     try:
         while True:
             before = ta.dtime
@@ -546,9 +560,6 @@ def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None):
         log.stop.reason = "interrupted"
         log.stop.message = f"interrupted at t = {float(ta.time):.17g} s after {counted(log.count, 'collision')}"
         return None, steps, ta
-    finally:
-        if gc_was_enabled:
-            gc.enable()
 
 
 def _reset(stop: StopRequest) -> None:
