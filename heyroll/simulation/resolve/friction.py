@@ -259,12 +259,15 @@ class FrictionModes:
             guard = RESOLUTION_ULPS * self.eps * self.weights[b] * abs(float(values[BLOCK_VALUES * b + 2]))
             if abs(float(capacity)) <= guard or abs(load) < abs(capacity) - guard:
                 continue
-            direction = 1 if load > 0 else -1
-            new = "sliding+" if direction > 0 else "sliding-"
-            self._start_moving(s, block, direction)
-            self.apply(ta, block, new)
-            self._note(t, s, block, new)
-            self.log.friction_transitions += 1
+            self._start_sliding(ta, s, t, block, 1 if load > 0 else -1)
+
+    def _start_sliding(self, ta, s, t, block, direction: int) -> None:
+        """Static friction no longer holds the unit: it slides from here along ``direction``, recorded."""
+        new = "sliding+" if direction > 0 else "sliding-"
+        self._start_moving(s, block, direction)
+        self.apply(ta, block, new)
+        self._note(t, s, block, new)
+        self.log.friction_transitions += 1
 
     def settle(self, ta, s, t) -> None:
         """Units whose turning point (q' = 0, or a slip w = 0) is nearer than the run's time
@@ -313,11 +316,7 @@ class FrictionModes:
             if block_mode(self.system, block, self.holder[1]) in ("stuck", "rolling"):
                 holds, direction, weightless = self._holds(s, t, b, weightless=True)
                 if not (holds or weightless):  # as a release event would have: it slides from here
-                    new = "sliding+" if direction > 0 else "sliding-"
-                    self._start_moving(s, block, direction)
-                    self.apply(ta, block, new)
-                    self._note(t, s, block, new)
-                    self.log.friction_transitions += 1
+                    self._start_sliding(ta, s, t, block, direction)
 
     def spins(self, before, t, was) -> tuple:
         """(per body u = sigma q' - w, the speed its spin rolls at, where it slipped in state ``before``

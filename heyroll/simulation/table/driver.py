@@ -194,11 +194,15 @@ class _Run:
             return any(float(self.geometry.wall(k, w, self.state[s], self.state[s + 1])[0]) <= touch + slack(k)
                        for (b, w) in self.system.walls if b == k)
 
+        def shift(k, step, nx, ny) -> None:
+            s = STATE_PER_BALL * k
+            self.state[s], self.state[s + 1] = self.state[s] + step * nx, self.state[s + 1] + step * ny
+
         for (k, w) in self.system.walls:
             s = STATE_PER_BALL * k
             distance, (nx, ny) = self.geometry.wall(k, w, self.state[s], self.state[s + 1])
             if touch < abs(float(distance)) <= slack(k):
-                self.state[s], self.state[s + 1] = self.state[s] + distance * nx, self.state[s + 1] + distance * ny
+                shift(k, distance, nx, ny)
         n = self.system.n_balls
         for i in range(n):
             for j in range(i + 1, n):
@@ -206,11 +210,9 @@ class _Run:
                 if not touch < abs(float(distance)) <= slack(i, j):
                     continue
                 if not on_cushion(j):
-                    sj = STATE_PER_BALL * j
-                    self.state[sj], self.state[sj + 1] = self.state[sj] - distance * nx, self.state[sj + 1] - distance * ny
+                    shift(j, -distance, nx, ny)
                 elif not on_cushion(i):
-                    si = STATE_PER_BALL * i
-                    self.state[si], self.state[si + 1] = self.state[si] + distance * nx, self.state[si + 1] + distance * ny
+                    shift(i, distance, nx, ny)
 
     def loop(self) -> None:
         if self.limit == 0:
