@@ -578,3 +578,26 @@ def test_a_ball_on_the_rail_and_one_touching_it_start_alike_in_every_precision(p
     assert result.status is Status.COMPLETED, result.message
     x2 = float(result.state_final[6])
     assert x2 <= 0.9 + 1e-15
+
+
+@pytest.mark.parametrize("half_angle", ["0.3", "0.185", "1.15"])
+def test_a_ball_in_a_corner_that_is_not_square_starts_on_both_walls_in_quad(half_angle):
+    """A ball touching both edges of a polygon corner (computed in 50 digits, written as doubles), leaving along
+    its bisector: the start put it onto one wall and then the other, moving it off the first where the corner is
+    not square (quad: overlap at t = 0, review). It is put onto both at once."""
+    import mpmath
+
+    with mpmath.workdps(50):
+        h, a0, r = mpmath.mpf(half_angle), mpmath.mpf("0.1"), mpmath.mpf("0.1")
+        p0 = (mpmath.mpf("0.3"), mpmath.mpf("-0.2"))
+        corner = [p0] + [(p0[0] + 3 * mpmath.cos(a), p0[1] + 3 * mpmath.sin(a)) for a in (a0, a0 + 2 * h)]
+        d = r / mpmath.sin(h)
+        c = (p0[0] + d * mpmath.cos(a0 + h), p0[1] + d * mpmath.sin(a0 + h))
+        v = (float(mpmath.cos(a0 + h)), float(mpmath.sin(a0 + h)))
+    vertices = ", ".join(f"[{float(x)!r}, {float(y)!r}]" for x, y in corner)
+    text = (f'[track]\ntype = "table"\nboundary = "polygon"\nvertices = [{vertices}]\n'
+            f'[[bodies]]\nshape = "solid_sphere"\nradius = 0.1\nmass = 1.0\nx = {float(c[0])!r}\ny = {float(c[1])!r}\n'
+            f'vx = {v[0]!r}\nvy = {v[1]!r}\n[run]\nt_end = 0.5\n')
+    for precision in ("double", "quad"):
+        result = simulate(parse_scene(text), precision=precision)
+        assert result.status is Status.COMPLETED and result.n_collisions == 0, (precision, result.message)

@@ -129,7 +129,10 @@ def impact_map_figure(result: SimulationResult, path) -> None:
     ax.set_xlabel("forcing phase at impact, nu t + psi (mod 2 pi) [rad]")
     ax.set_ylabel("impact speed (closing rate, or |q'| at a limiter)")
     ax.legend(fontsize=7, loc="best")
-    ax.set_title(f"{result.scene.name}: impact map ({t.size} impacts; {f.describe()})", fontsize=8)
+    # (a run streamed to its table keeps its first chunk of records: the map says it shows those)
+    shown = f"{t.size} impacts" if result.kept_collisions == result.n_collisions else \
+        f"the first {t.size} impacts; {result.n_collisions} collisions in the run"
+    ax.set_title(f"{result.scene.name}: impact map ({shown}; {f.describe()})", fontsize=8)
     _save(fig, Path(path))
 
 

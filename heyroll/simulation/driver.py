@@ -740,10 +740,9 @@ def records_to_arrays(records: list, n_bodies: int, modes: list | None = None) -
     """
     n, nb = len(records), n_bodies
     # Rough tracks: a sixth and a seventh array, the friction modes of each collision's bodies and
-    # the speeds their spins would roll at where they slip, with the other bodies' slip energy
-    # (events.CollisionLog.record_modes).
+    # the speed every body's spin would roll at where it slips (events.CollisionLog.record_modes).
     extra = () if modes is None else (np.array([m[:4] for m in modes], dtype="U8").reshape(n, 4),
-                                      np.array([m[4:] for m in modes], dtype=float).reshape(n, 3))
+                                      np.array([m[4:] for m in modes], dtype=float).reshape(n, n_bodies))
     if not n:
         empty = np.zeros((0, 2 * nb))
         return (np.zeros(0), np.zeros(0, dtype=np.int64), empty, empty.copy(), np.zeros(0, dtype=np.int64)) + extra

@@ -103,9 +103,8 @@ class CollisionLog:
     #: and the stroboscopic section's samples: (t, full state) once a forcing period.
     friction_transitions: int = 0
     strobe: list = field(default_factory=list)
-    #: Rough tracks: per record, the friction modes of its bodies i, j before and after, the speeds
-    #: u_i, u_j their spins would roll at where they slip (nan where they roll) and the other bodies'
-    #: slip energy (else None).
+    #: Rough tracks: per record, the friction modes of its bodies i, j before and after, and the speed
+    #: each body's spin would roll at where it slips (nan where it rolls) (else None).
     record_modes: list | None = None
     #: The mode handlers built on this log, kept for its next runs (simulation.driver._handlers)
     handler_sets: object = None
@@ -242,20 +241,14 @@ def _with_friction(scene, system, log, holder, friction, time_scale, handlers, w
 
 def fill_record_modes(log, body_modes, pair_bodies, upto=None, was=None, spins=None) -> None:
     """Give the records that have no friction modes yet, up to record ``upto``, the bodies' modes:
-    ``was`` before (default: the present ones) and the present ones after; ``spins``: FrictionModes.spins,
-    the speed u_k body k's spin rolls at where it slipped before (nan: rolling) and the slip energies, of
-    which the bodies not in the impact give the record its third number (their slip energy, unchanged by
-    the impact: without it a table's energies left out the slip of a body sliding elsewhere, 1.2 %,
-    acceptance test)."""
+    ``was`` before (default: the present ones) and the present ones after; ``spins[k]``: the speed body
+    k's spin rolls at where it slipped before (FrictionModes.spins; nan: rolling), every body's: a table's
+    energies count the slip of a body sliding elsewhere too (it left them out, 1.2 %: acceptance test)."""
     records, record_modes = log.records, log.record_modes
     was = body_modes if was is None else was
+    u = tuple(spins) if spins is not None else (math.nan,) * len(body_modes)
     for record in records[len(record_modes): len(records) if upto is None else upto]:
         i, j = pair_bodies[record[1]]
-        if spins is None:
-            u = (math.nan, math.nan, 0.0)
-        else:
-            speeds, energies = spins
-            u = (speeds[i], speeds[j], math.fsum(e for k, e in enumerate(energies) if k != i and k != j))
         record_modes.append((was[i], was[j], body_modes[i], body_modes[j]) + u)
 
 

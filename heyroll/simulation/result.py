@@ -208,19 +208,16 @@ def build_collision_table(
     table["energy_after"] = state_energies(scene, after, number).sum(axis=1)
     if scene.rough and spins is not None:
         # A slipping body's kinetic energy is 1/2 m v^2 + 1/2 m (kappa - 1) u^2, not the rolling
-        # 1/2 kappa m v^2: the difference, with its spin's u unchanged through the impact.
-        spins = np.asarray(spins, dtype=float).reshape(n, -1)
-        if spins.shape[1] > 2:  # the other bodies' slip energy, unchanged by the impact
-            others = [number(float(e)) for e in spins[:, 2]]
-            for name in ("energy_before", "energy_after"):
-                table[name] = table[name] + np.array(others, dtype=table[name].dtype)
-        for side, idx, col in (("i", i, 0), ("j", j, 1)):
-            for r in np.flatnonzero(~np.isnan(spins[:, col])):
-                k = int(idx[r])
-                body = scene.bodies[k]
+        # 1/2 kappa m v^2: the difference, for every slipping body (not only the row's two: a body sliding
+        # elsewhere was left out, acceptance test), each row with its own rates, u unchanged through the
+        # impacts of an instant (the spin keeps it; one u for every row of a triple impact, review).
+        spins = np.asarray(spins, dtype=float).reshape(n, nb)
+        for k in np.flatnonzero(~np.all(np.isnan(spins), axis=0)):
+            body = scene.bodies[k]
+            share = 0.5 * float(body.mass) * (float(body.kappa) - 1)
+            for r in np.flatnonzero(~np.isnan(spins[:, k])):
                 sigma = float(scene.track.sigma(body, float(before[r, k])))
-                share = 0.5 * float(body.mass) * (float(body.kappa) - 1)
-                u = spins[r, col]
+                u = spins[r, k]
                 for name, state in (("energy_before", before), ("energy_after", after)):
                     v = sigma * float(state[r, nb + k])
                     table[name][r] = table[name][r] + number(share * (u * u - v * v))
@@ -309,8 +306,7 @@ class SimulationResult:
     #: (see transition_table); each body's mode and slip velocity w (m/s) at the end.
     transitions: tuple = ()
     #: Rough tracks: per kept collision the modes of bodies i and j before and after it (MODE_COLUMNS),
-    #: the speeds u_i, u_j their spins roll at where they slip (nan: rolling) and the other bodies' slip
-    #: energy (the table's energies).
+    #: and the speed each body's spin rolls at where it slips (nan: rolling; the table's energies).
     collision_modes: np.ndarray | None = None
     collision_spins: np.ndarray | None = None
     final_modes: tuple = ()

@@ -198,11 +198,23 @@ class _Run:
             s = STATE_PER_BALL * k
             self.state[s], self.state[s + 1] = self.state[s] + step * nx, self.state[s + 1] + step * ny
 
-        for (k, w) in self.system.walls:
+        for k in range(self.system.n_balls):
             s = STATE_PER_BALL * k
-            distance, (nx, ny) = self.geometry.wall(k, w, self.state[s], self.state[s + 1])
-            if touch < abs(float(distance)) <= slack(k):
-                shift(k, distance, nx, ny)
+            near = [self.geometry.wall(k, w, self.state[s], self.state[s + 1]) for (b, w) in self.system.walls if b == k]
+            near = [(d, normal) for d, normal in near if abs(float(d)) <= slack(k)]
+            if not any(abs(float(d)) > touch for d, _ in near):
+                continue
+            if len(near) == 1:
+                (d, (nx, ny)), = near
+                shift(k, d, nx, ny)
+            elif len(near) == 2:
+                # in a corner onto both walls at once (n_A . step = d_A, n_B . step = d_B): one wall after the other
+                # moved it off the first where the corner is not square (quad: overlap at t = 0, review)
+                (da, (ax, ay)), (db, (bx, by)) = near
+                det = ax * by - ay * bx
+                if abs(float(det)) > 1e-3:
+                    step_x, step_y = (da * by - ay * db) / det, (ax * db - da * bx) / det
+                    self.state[s], self.state[s + 1] = self.state[s] + step_x, self.state[s + 1] + step_y
         n = self.system.n_balls
         for i in range(n):
             for j in range(i + 1, n):
