@@ -419,3 +419,16 @@ def test_a_forced_run_draws_its_stroboscopic_section_from_the_whole_run(tmp_path
     assert main(["run", str(scene), "--t-end", "8", "--out", str(out), "--progress", "off"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["files"]["stroboscopic_figure"] == "stroboscopic.png" and (out / "stroboscopic.png").is_file()
+
+
+def test_validate_does_not_hold_a_rough_or_forced_scene_to_the_smooth_reference(tmp_path):
+    """validate on a rough circle compared it with the smooth circle's elliptic reference ('pair sequence
+    DIFFERENT'), and on a forced path track that starts at energy 0 it divided by 0 (traceback, no report:
+    acceptance test). The report now checks such scenes across precisions and says why the reference is not
+    applied."""
+    for name, why in (("rough_circle", "has no friction"), ("rough_parabola_forced", "has no forcing")):
+        out = tmp_path / name
+        assert main(["validate", str(EXAMPLE.parent / f"{name}.toml"), "--out", str(out), "--collisions", "3"]) == 0
+        report = (out / "report.md").read_text()
+        assert why in report and "Collision times: double and long against quad" in report
+    assert "J from 0" in report  # (the forced track starts at energy 0)

@@ -601,3 +601,18 @@ def test_two_keys_that_set_one_quantity_are_refused(keys, tmp_path):
     with pytest.raises(SweepError, match="one quantity"):
         make_plan(None, random=[f"{keys[0]}=0.5:1", f"{keys[1]}=0.5:1"], samples=3)
     assert make_plan(None, grid=[("vary", f"{keys[0]}=0.5:1:2"), ("vary", "bodies[2].phi=0.1:0.2:2")]).n_points == 4
+
+
+def test_a_scalar_with_no_finite_value_is_refused_not_drawn_empty(tmp_path, capsys):
+    """relative_energy_change divides by energy_initial: on a forced track that starts at energy 0 every point
+    was inf, and `plot --scalar relative_energy_change` drew an empty figure with a made-up axis, exit 0
+    (acceptance test). It is undefined there (NaN) and the plot refuses it in one line."""
+    out = tmp_path / "s"
+    run_sweep(ROOT / "examples" / "rough_parabola_forced.toml", values={"forcing.amplitude": [1.5, 2.0]}, t_end=1.0,
+              workers=1, out=out)
+    capsys.readouterr()
+    assert main(["plot", str(out / "sweep.zarr"), "--out", str(tmp_path / "f"), "--scalar",
+                 "relative_energy_change"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--scalar" in err and "energy_initial = 0" in err
+    assert not (tmp_path / "f").exists()
