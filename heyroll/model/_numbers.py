@@ -153,5 +153,6 @@ def touching_slack(*coordinates) -> mpmath.mpf:
     """How far past touching two bodies placed by these coordinates may start (model precision): ~16 ulps of the
     largest, the round-off of places written as doubles (a cradle's angles, a rack's irrational places written to
     17 digits came out 1e-17 past touching and were refused: acceptance tests). The run's start moves such
-    contacts to touching in the run's own number type (the settlers' close_start) and settles them."""
-    return mpmath.mpf(TOUCHING_SLACK) * max([1] + [abs(c) for c in coordinates])
+    contacts to touching in the run's own number type (the settlers' close_start) and settles them. Model numbers
+    in, a model number out; floats (the engine's) in, a float out: the same value (2^-48 times one of them)."""
+    return TOUCHING_SLACK * max([1.0] + [abs(c) for c in coordinates])

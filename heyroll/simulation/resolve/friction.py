@@ -166,13 +166,14 @@ class FrictionModes:
 
     # -- decisions -------------------------------------------------------------------------
 
-    def _holds(self, s, t, b, weightless: bool = False):
+    def _holds(self, s, t, b, weightless: bool = False, values=None):
         """(static friction holds the block, the load's sign) at state s. The capacity is taken on
         the reaction's magnitude: on a two-sided track the side parameter may lag an instant where
         N changes sign (events at one instant), where mu_s side N_in < 0 is no release.
         ``weightless``: also whether the capacity is below the rounding of the loads (the reaction
-        passing through zero: load and capacity vanish together and their ratio is noise)."""
-        values = self._evaluate(s, t)
+        passing through zero: load and capacity vanish together and their ratio is noise). ``values``: the
+        friction function's at s, where the caller has them."""
+        values = self._evaluate(s, t) if values is None else values
         load, capacity = values[BLOCK_VALUES * b], values[BLOCK_VALUES * b + 1]
         guard = RESOLUTION_ULPS * self.eps * self.weights[b] * abs(float(values[BLOCK_VALUES * b + 2]))
         out = (abs(load) <= abs(capacity) + guard, (1 if load > 0 else -1))
@@ -256,11 +257,11 @@ class FrictionModes:
         (acceptance test). A unit at its capacity to within round-off whose excess load is rising (read off
         the step's Taylor polynomial a moment later) slides from here, as its event would have made it; one
         that stays at the limit (a disk on a slope of exactly mu_s kappa/(kappa - 1): review) holds."""
-        later = None
+        later = values = None
         for b, block in enumerate(self.system.friction_blocks):
             if b == fired or block_mode(self.system, block, self.holder[1]) not in ("stuck", "rolling"):
                 continue
-            values = self._evaluate(s, t)
+            values = self._evaluate(s, t) if values is None else values
             load, capacity = values[BLOCK_VALUES * b], values[BLOCK_VALUES * b + 1]
             guard = RESOLUTION_ULPS * self.eps * self.weights[b] * abs(float(values[BLOCK_VALUES * b + 2]))
             if abs(float(capacity)) <= guard or abs(load) < abs(capacity) - guard:
@@ -272,17 +273,21 @@ class FrictionModes:
                       > abs(float(load)) - abs(float(capacity)) + guard)
             if rising:
                 self._start_sliding(ta, s, t, block, 1 if load > 0 else -1)
+                values = None  # (its mode changed the state and parameters: evaluated again)
 
     def _slip_where_not_held(self, ta, s, t, body: int | None = None) -> None:
         """Rolling or stuck units (of ``body``; every one for None) that static friction no longer holds
         slide from here, as their release or slip event would have made them."""
+        values = None  # (one evaluation for every unit, again after a unit's mode changed)
         for b, block in enumerate(self.system.friction_blocks):
             if body is not None and body not in block.members:
                 continue
             if block_mode(self.system, block, self.holder[1]) in ("stuck", "rolling"):
-                holds, direction, weightless = self._holds(s, t, b, weightless=True)
+                values = self._evaluate(s, t) if values is None else values
+                holds, direction, weightless = self._holds(s, t, b, weightless=True, values=values)
                 if not (holds or weightless):
                     self._start_sliding(ta, s, t, block, direction)
+                    values = None
 
     def _start_sliding(self, ta, s, t, block, direction: int) -> None:
         """Static friction no longer holds the unit: it slides from here along ``direction``, recorded."""

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...model._numbers import TOUCHING_SLACK, workprec
+from ...model._numbers import touching_slack, workprec
 from .friction import slipping, slipping_law
 from ..contact_function import CONTACT_VALUES, evaluate
 from .constraints import cluster_impact
@@ -311,9 +311,9 @@ def local_settler(scene, system, resolvers, log, holder, time_scale, function):
             return
         for number, (a, b) in enumerate(where):
             pair = system.contacts[number].pair
-            centres = [abs(float(c)) for k, q in ((pair.i, s[a]), (pair.j, s[b]))
+            centres = [float(c) for k, q in ((pair.i, s[a]), (pair.j, s[b]))
                        for c in scene.track.centre(scene.bodies[k], float(q))]
-            slack = TOUCHING_SLACK * max([1.0] + centres)
+            slack = touching_slack(*centres)
             band = RESOLUTION_ULPS * eps * (1 + abs(float(s[a])) + abs(float(s[b])))
             for _ in range(3):
                 gap, _gi, gj = values(s, number)[:3]

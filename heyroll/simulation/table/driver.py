@@ -13,7 +13,7 @@ import time
 
 import heyoka as hy
 
-from ...model._numbers import TOUCHING_SLACK, workprec
+from ...model._numbers import touching_slack, workprec
 from ...model.table import TableScene
 from ...model.table.boundaries import sqrt
 from ..driver import DEFAULT_MAX_EVENTS, RunOptions, signals_deferred
@@ -186,8 +186,7 @@ class _Run:
         touch = float(self.geometry.touch)
 
         def slack(*balls) -> float:
-            return TOUCHING_SLACK * max([1.0] + [abs(float(self.state[STATE_PER_BALL * k + m])) for k in balls
-                                                 for m in (0, 1)])
+            return touching_slack(*(float(self.state[STATE_PER_BALL * k + m]) for k in balls for m in (0, 1)))
 
         def on_cushion(k) -> bool:
             s = STATE_PER_BALL * k
