@@ -107,6 +107,54 @@ def test_a_pile_comes_to_rest_on_a_limiter():
     assert abs(gaps(scene, final)[0]) < 1e-13
 
 
+def test_a_cluster_hitting_a_limiter_rebounds_as_one_and_comes_to_rest_on_it():
+    # Two disks merged plastically roll down a straight slope onto the lower limiter (k = 0.5). The cluster
+    # rebounds as one (Newton's law on the gap to the stop, the cluster rigid, as when a body hits a
+    # cluster): both members at -k times the impact rate. Resolved one by one instead, a plastic cluster
+    # pressed onto a stop is an endless cascade at one instant (a forced chain of four stopped "failed").
+    slope = CurveTrack.make("0.3*x", "-1", "1")
+    heavy = Body.of_shape("disk", "0.05", mass="2")
+    scene = Scene.make(slope, [DISK, heavy], ["0", "0.3"], [0, -1], limiter_restitution="0.5",
+                       law=heyroll.make_law("newton", "0"), run=RunSettings.make(5))
+    result = simulate(scene)
+    assert result.status.value == "completed", result.message
+    merged = result.mode_changes[1]
+    assert merged.clusters == ((1, 2),)
+    # From the merge the cluster rolls down the slope at x'' = g sin(a) cos(a) / kappa to x = -1.
+    x0, v0 = -float(merged.state[0]), -float(merged.state[2])
+    a = float(scene.g) * 0.3 / 1.09 / 1.5
+    hit = merged.t + (-v0 + np.sqrt(v0 * v0 + 2 * a * (1 - x0))) / a
+    impacts = result.passage_table()
+    assert impacts[0]["kind"] == 1 and abs(impacts[0]["t"] - hit) < 1e-12
+    assert abs(impacts[0]["dq_after"] + 0.5 * impacts[0]["dq_before"]) < 1e-12
+    assert impacts[0]["dq_before"] == pytest.approx(-(v0 + a * (hit - merged.t)), rel=1e-12)
+    # every rebound a rigid one (no release, no cascade), then the whole cluster rests on the stop
+    assert [m.clusters for m in result.mode_changes] == [(), ((1, 2),), ((1, 2),)]
+    assert result.mode_changes[-1].pinned == (((1, 2), "lower"),)
+    assert np.all(np.diff(impacts["dq_after"]) < 0)
+    fast = impacts["dq_after"] > 1e-3  # (slower ones feel the few ulps each rebound moves the body off the stop)
+    rates = impacts["dq_after"][fast]
+    assert len(rates) > 5 and np.allclose(rates[1:] / rates[:-1], 0.5, rtol=1e-9)
+    final = np.asarray(result.final_state, dtype=float)
+    assert np.all(final[2:] == 0) and abs(gaps(scene, final)[0]) < 1e-13
+
+
+def test_a_forced_plastic_chain_driven_onto_a_limiter_runs_on():
+    # Before: the stop released the cluster, its contacts were resolved one by one, the plastic cascade
+    # merged and released again at one instant a factor smaller each round: status failed at t = 1.92 s.
+    from pathlib import Path
+
+    from heyroll.interfaces.scene_file import load_scene
+
+    result = simulate(load_scene(Path(__file__).parent / "data" / "forced_cluster_on_limiter.toml"))
+    assert result.status.value == "completed", result.message
+    assert result.passage_counts[1] > 50  # limiter impacts, rigid ones of the cluster among them
+    final = np.asarray(result.final_state, dtype=float)
+    assert min(gaps(result.scene, final)) > -1e-12
+    instants = [m.t for m in result.mode_changes]
+    assert max(instants.count(t) for t in instants) <= 2  # no cascade of mode changes at one instant
+
+
 def test_persistent_contact_on_a_curve_in_every_precision():
     scene = Scene.make(PARABOLA, [DISK] * 2, ["-0.6", "0.3"], [0, 0], law=heyroll.make_law("hedrih", "0"),
                        run=RunSettings.make(5))

@@ -11,8 +11,9 @@ one-body limit of the collision laws, m_2 -> infinity), with k the scene's
 
 A body whose rebounds on a stop fall below the run's resolution while the
 track pushes it there comes to rest on it (the driver pins its unit, see
-:class:`heyroll.simulation.system.Unit`); a member of a cluster that hits a
-stop releases its cluster, whose contacts are then resolved as collisions.
+:class:`heyroll.simulation.system.Unit`); a cluster whose end member hits a
+stop rebounds as one (:func:`.constraints.stop_impact`), or, where that would
+need a contact to pull, is released, its contacts then resolved as collisions.
 
 After either the body sits exactly on an event surface, and heyoka misses a
 root of an event function that starts a step at 0.0: the new piece's far
@@ -25,6 +26,7 @@ from __future__ import annotations
 from ..contact_function import BODY_VALUES, evaluate
 from ..events import OPEN_ULPS, below_resolution
 from ..system import piece_bounds
+from .constraints import stop_impact
 
 #: Passage kinds, in the passages table.
 PASSAGE_KINDS = ("junction", "limiter_lower", "limiter_upper")
@@ -114,8 +116,15 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
             kept[:] = pars[: len(kept)]
             return log.record_passage((t, k, 0, piece, new, q, v, v)) and after_junction(ta, s, pars, t)
         v_new = -k_lim * v
-        s[nu + u] = v_new
-        s[u] = q - margin if upper else q + margin
+        rigid = stop_impact(system, s, pars, k, upper, k_lim) if in_cluster and system.per_body else None
+        if rigid is not None:  # the cluster rebounds as one (each member's rate from the links)
+            for m, rate in rigid.items():  # (all moved off the stop alike: the links stay closed)
+                s[nu + m] = rate
+                s[m] = s[m] - margin if upper else s[m] + margin
+            v_new = s[nu + u]
+        else:
+            s[nu + u] = v_new
+            s[u] = q - margin if upper else q + margin
         if not log.record_passage((t, k, 2 if upper else 1, piece, piece, q, v, v_new)):
             return False
         # Resting on the stop: the rebounds left are below the run's resolution
@@ -128,10 +137,12 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
                 # The driver pins its unit on the stop (system.Unit.pinned) until the forces pull it away.
                 stop.reason, stop.data = "rest", {"body": k, "end": event.end}
                 return False
-        if in_cluster:
+        if in_cluster and rigid is None:
             # The rest of its cluster runs on into it: the contacts are resolved as collisions.
             stop.reason, stop.data = "release", {"bodies": (k,)}
             return False
+        if rigid is not None:
+            return settle is None or settle(s, t, [system.state_index(m) for m in rigid])
         # A neighbour touching it at this instant (a collision has just sent it into the stop) now approaches
         # from a gap of 0.0, where its collision event cannot fire: it ran on into the body unseen (status
         # overlap, acceptance test). The settler resolves it now, as after a collision.

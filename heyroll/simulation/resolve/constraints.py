@@ -122,6 +122,62 @@ def cluster_impact(system, s, pars, contact, grad, closing, restitution, slippin
     return out
 
 
+def stop_impact(system, s, pars, k, upper: bool, restitution):
+    """A member of a cluster hits a stop (a limiter): Newton's law on the gap to the stop with the
+    cluster kept rigid through the impact, as when a body hits a cluster (:func:`cluster_impact`).
+
+    The stop is the chain's end with inverse mass 0 (the one-body limit, m -> infinity);
+    impulses on the stop's contact and on the cluster's links leave every link's rate at 0 and
+    turn member k's closing rate on the stop c into -k c. Returns the new rates of the unit's
+    members {m: q_m'}, or None where k is not the cluster's end at that stop or a link would have
+    to pull: the caller releases the cluster (its contacts then resolved one by one). Resolving
+    them one by one where a plastic cluster is pressed onto a stop is an endless cascade at one
+    instant, a factor smaller each round (a forced chain of four on a parametric track: stopped
+    after 33 mode changes).
+    """
+    n = system.n_bodies
+    members = list(system.units[system.unit_of[k]].members)
+    if k != (members[-1] if upper else members[0]):
+        return None
+    links = link_function(system)
+    if links is None:
+        return None
+    link_values = evaluate(links, s, pars).tolist()
+    bodies = evaluate(body_function(system), s, pars).tolist()
+    inverse = [1 / (system.precision.number(system.rolling_mass[m]) * bodies[BODY_VALUES * m + 3] ** 2)
+               for m in members]
+    grads, rhs = [], []
+    for x, y in zip(members, members[1:]):
+        number = next((m for m, link in enumerate(system.links) if link_bodies(system, link) == (x, y)), None)
+        if number is None:
+            return None
+        grads.append(tuple(link_values[3 * number + 1: 3 * number + 3]))
+        rhs.append(s[n + k] * 0)
+    one = s[n + k] * 0 + 1
+    # the gap to the stop: q_hi - q_k (upper) or q_k - q_lo (lower); the stop's own gradient is moot
+    closing = -s[n + k] if upper else s[n + k]
+    if upper:
+        chain_grads, weights = grads + [(-one, 0 * one)], inverse + [0 * one]
+        rhs.append(-(1 + restitution) * closing)
+    else:
+        chain_grads, weights = [(0 * one, one)] + grads, [0 * one] + inverse
+        rhs.insert(0, -(1 + restitution) * closing)
+    impulses = _tridiagonal(chain_grads, weights, rhs)
+    if any(float(x) < 0 for x in impulses):
+        return None
+    out = {}
+    offset = 0 if upper else 1  # the members' places in the chain
+    for p, m in enumerate(members):
+        c = p + offset
+        push = 0
+        if c > 0:
+            push = push + impulses[c - 1] * chain_grads[c - 1][1]
+        if c < len(impulses):
+            push = push + impulses[c] * chain_grads[c][0]
+        out[m] = s[n + m] + push * weights[c]
+    return out
+
+
 def _tridiagonal(grads, M, rhs, *, inverse=True) -> list:
     """Solve sum_m A_lm x_m = rhs_l, A_lm = sum_k dg_l/dq_k dg_m/dq_k w_k (members k of links l, m).
 
