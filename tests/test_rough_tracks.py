@@ -862,3 +862,69 @@ def test_a_unit_that_stays_at_the_static_limit_holds_when_another_starts_to_slip
     assert [int(r["body"]) for r in both.transition_table()] == [1]  # the sphere only
     assert both.final_modes[1] == alone.final_modes[0] == "rolling"
     assert float(both.final_state[1]) == pytest.approx(float(alone.final_state[0]), rel=1e-12)
+
+
+def _ring_and_disk_on_a_slope(mu_s: str) -> Scene:
+    # y = x/2: both roll alone (the ring needs F/N = tan(a)/2 = 0.25), the disk faster; it catches the ring
+    # and they merge (plastic). Rolling together at a = g sin(a) (m1 + m2)/(kappa1 m1 + kappa2 m2) = 4/7 g sin(a),
+    # the ring (the lower one, pushed) needs F = (kappa - 1) m a: F/N = (4/7) tan(a) = 2/7.
+    ring = Body.of_shape("ring", "0.05", mass=1)
+    disk = Body.of_shape("disk", "0.05", mass=1)
+    return Scene.make(CurveTrack.make("0.5*x", "-2", "2"), [ring, disk], ["0", "0.5"], [0, 0],
+                      law=make_law("newton", 0), friction=mu_s, static_friction=mu_s, g=G, run=RunSettings.make(2))
+
+
+@pytest.mark.parametrize("mu_s, slips", [("0.2855", True), ("0.2859", False)])
+def test_a_cluster_member_pushed_down_a_slope_slips_where_mu_s_is_below_the_closed_form_need(mu_s, slips):
+    result = simulate(_ring_and_disk_on_a_slope(mu_s))
+    assert [m.clusters for m in result.mode_changes][:2] == [(), ((1, 2),)]
+    if slips:  # (at the merge: the margin is below 0 from the cluster's first instant, where no event can see it)
+        assert result.status is Status.SLIP and result.message.startswith("body 1 would slip in its cluster")
+        assert result.t_final == result.mode_changes[1].t
+    else:
+        assert result.status is Status.COMPLETED, result.message
+
+
+def test_a_cluster_rising_up_a_steepening_bowl_stops_where_a_member_needs_more_than_mu_s_n():
+    # Review: on a path track no event watched a cluster member's slip, and two rings rolled together up
+    # y = 2 x^2 to x = 0.32, where rolling needs twice what mu_s N holds. The ring in front needs
+    # F = (kappa - 1) m v' (v' its centre's tangential acceleration, the contact force included): at the
+    # stop F = mu_s N, checked here from the stop's state with the constrained motion solved independently.
+    ring = Body.of_shape("ring", "0.05", mass=1)
+    track = CurveTrack.make("2*x**2", "-1", "1")
+    scene = Scene.make(track, [ring, ring], ["-0.12", "0"], ["2.5", 0], law=make_law("newton", 0),
+                       friction="0.3", static_friction="0.3", g=G, run=RunSettings.make(1))
+    result = simulate(scene)
+    assert result.status is Status.SLIP and result.message.startswith("body 2 starts to slip"), result.message
+    q = np.asarray(result.final_state[:2], dtype=float)
+    v = np.asarray(result.final_state[2:], dtype=float)
+    g, h = 9.81, 1e-5
+
+    def centre(k, x):
+        cx, cy = track.centre(ring, [x])
+        return np.array([cx[0], cy[0]])
+
+    def sigma(k, x):
+        return float(track.sigma(ring, [x])[0])
+
+    def own(k):  # a rolling ring alone: kappa sigma^2 q'' = -g dy_C/dq - kappa sigma sigma' q'^2
+        dy = (centre(k, q[k] + h)[1] - centre(k, q[k] - h)[1]) / (2 * h)
+        ds = (sigma(k, q[k] + h) - sigma(k, q[k] - h)) / (2 * h)
+        return (-g * dy - 2 * sigma(k, q[k]) * ds * v[k] ** 2) / (2 * sigma(k, q[k]) ** 2)
+
+    def gap(x1, x2):
+        return np.linalg.norm(centre(1, x2) - centre(0, x1)) - 0.1
+
+    g1 = (gap(q[0] + h, q[1]) - gap(q[0] - h, q[1])) / (2 * h)
+    g2 = (gap(q[0], q[1] + h) - gap(q[0], q[1] - h)) / (2 * h)
+    d = h * 10
+    second = (gap(q[0] + d * v[0], q[1] + d * v[1]) - 2 * gap(*q) + gap(q[0] - d * v[0], q[1] - d * v[1])) / d**2
+    M = [2 * sigma(k, q[k]) ** 2 for k in (0, 1)]  # kappa m sigma^2 per unit mass
+    lam = -(g1 * own(0) + g2 * own(1) + second) / (g1**2 / M[0] + g2**2 / M[1])
+    acc2 = own(1) + lam * g2 / M[1]
+    ds2 = (sigma(1, q[1] + h) - sigma(1, q[1] - h)) / (2 * h)
+    tangential = sigma(1, q[1]) * acc2 + ds2 * v[1] ** 2  # v' of the front ring's centre
+    slope = 4 * q[1]
+    radius = (1 + slope**2) ** 1.5 / 4 - 0.05  # the centre's path: y = 2 x^2's radius of curvature less r
+    normal = g / math.sqrt(1 + slope**2) + (sigma(1, q[1]) * v[1]) ** 2 / radius  # N/m, concave side
+    assert abs(abs(tangential) - 0.3 * normal) < 1e-6 * normal  # (N without the contact forces' share, as documented)

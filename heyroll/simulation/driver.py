@@ -33,7 +33,7 @@ from .resolve.friction import FrictionState, initial_modes
 from .compiled_cache import CompiledCache, by_constants, by_scene
 from .precision import Precision
 from .result import SimulationResult, Status, counted, passage_table
-from .contact_function import body_function, evaluate
+from .contact_function import body_function, evaluate, slip_margin_function
 from .resolve.bounds import left_track_message, parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
 from .system import (
@@ -374,8 +374,10 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                     full_state = system.expand(ta.state.tolist())
                     modes[-1] = ModeChange(modes[-1].t, modes[-1].clusters, tuple(full_state), modes[-1].pinned)
                 overlap = _overlap(scene, precision, full_state, "at the start of a mode")
-                if overlap:
-                    log.stop.reason, log.stop.message = "overlap", overlap
+                problem = ("overlap", overlap) if overlap else \
+                    _slip_at_start(system, ta, holder[1]) if friction_modes is not None else None
+                if problem:
+                    log.stop.reason, log.stop.message = problem
                 else:
                     optimized = _optimized_successor(system, options, cooldown, handlers, warnings, holder, stream) \
                         if quick else None
@@ -583,6 +585,27 @@ def _join(scene, units, a, b):
     """
     merged = cluster_unit(scene, units[a].members + units[b].members, pinned=units[a].pinned or units[b].pinned)
     return units[:a] + (merged,) + units[b + 1:]
+
+
+def _slip_at_start(system, ta, pars):
+    """("slip", why) where a cluster member needs more friction to roll than mu_s N as its mode starts, or None.
+
+    Its slip events watch the margin fall through 0; a cluster that forms (or a run that starts) with the
+    margin already below 0 would roll on unwatched (review)."""
+    function = slip_margin_function(system)
+    if function is None:
+        return None
+    margins = evaluate(function, ta.state, pars, ta.time)
+    watched = [ev for ev in system.track_events if ev.kind == "slip"]
+    for ev, margin in zip(watched, margins):
+        if float(margin) < 0:
+            full = system.expand(ta.state.tolist())
+            c, k = system.coordinate, ev.body
+            return "slip", (f"body {k + 1} would slip in its cluster as the contact mode starts: the friction "
+                            f"needed to roll exceeds mu_s N, at {c} = {float(full[k]):.17g}, "
+                            f"d{c} = {float(full[system.n_bodies + k]):.17g}, t = {float(ta.time):.17g} s; "
+                            "slipping inside a cluster is not modelled; stopped")
+    return None
 
 
 def _release(units, bodies) -> tuple:

@@ -518,6 +518,7 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
         return forcing_terms(scene, k, term, q if variable is None else variable, body.kappa, par)
 
     rough = scene.rough
+    contact_pushes: dict = {}  # per-body clusters on a rough track (below)
     n_rolls = sum(1 for u in units if len(u.members) == 1 and not slides(scene.bodies[u.members[0]])) if rough else 0
     slip_vars = _vars("w", n_rolls) if n_rolls else []
     friction = None
@@ -556,6 +557,16 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
             accelerations, links, link_exprs, link_terms = _constrained_accelerations(
                 scene, units, terms, psi, dpsi, par, events)
             if rough:
+                # A rolling member's contact force along its path, per unit mass: kappa m sigma^2 q'' =
+                # kappa m sigma^2 a_k + Q_k, so Q_k / (m sigma) = kappa sigma (q'' - a_k). Rolling needs
+                # the friction (1 - 1/kappa) (T + Q_k / (m sigma)) (review: without it no event watched
+                # a cluster member's slip on a path track, and a cluster rolled up slopes mu cannot hold).
+                for unit in units:
+                    if unit.is_cluster and not unit.pinned:
+                        for k in unit.members:
+                            if not slides(scene.bodies[k]):
+                                contact_pushes[k] = par(scene.bodies[k].kappa) * terms[k].sigma * (
+                                    accelerations[k] - terms[k].acceleration)
                 for block in friction[0]:
                     if len(block.members) > 1:  # a stuck cluster does not move, whatever its contacts
                         for k in block.members:
@@ -722,7 +733,10 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
         # sin((nu t + psi)/2) vanishes once a forcing period, at nu t + psi = 2 pi n.
         strobe = hy.sin(par(scene.forcing.frequency / 2) * hy.time + par(scene.forcing.phase / 2))
     track_units = singleton_units(n) if per_body else units
-    track_events, track_exprs = (_track_events(scene, reach, track_units, psi, dpsi, par, body_terms, terms)
+    stuck_of = {k: hy.par[block.stuck] for block in friction[0] if len(block.members) > 1
+                for k in block.members} if rough else {}
+    track_events, track_exprs = (_track_events(scene, reach, track_units, psi, dpsi, par, body_terms, terms,
+                                               contact_pushes, stuck_of)
                                  if events else ([], []))
     if per_body:
         body_exprs = [[t.x_c, t.y_c, t.normal, t.sigma, t.driving, a] for t, a in zip(terms, accelerations)]
@@ -938,20 +952,26 @@ def _vars(prefix: str, n: int) -> list:
     return [made] if n == 1 else list(made)
 
 
-def _track_events(scene: Scene, reach: EnergyReach, units, psi, dpsi, par, body_terms, free_terms):
+def _track_events(scene: Scene, reach: EnergyReach, units, psi, dpsi, par, body_terms, free_terms,
+                  contact_pushes=None, stuck_of=None):
     """Normal force and friction events, only for bodies the energy can take there.
 
     The track pushes with N (per unit mass, :class:`heyroll.model.tracks.BodyTerms`;
     on the circle N/m = rho phi'^2 + g cos phi) and rolling needs the friction
     F = (1 - 1/kappa) times the driving force (on the circle m g sin phi
-    (1 - 1/kappa), paper eqs. 21, 25). On a one-sided track N = 0 ends the
-    run; on a two-sided one (the default) the first time is recorded as a
-    warning. On a fixed circle N can vanish only above the centre's height
-    (cos phi < 0): a body whose weight moment exceeds the system's whole
-    energy never gets there. Bodies in a cluster are checked with these
-    free-body forces (the contact force's share is not included; see README).
+    (1 - 1/kappa), paper eqs. 21, 25), which static friction holds while
+    |F| <= mu_s N. On a one-sided track N = 0 ends the run; on a two-sided one
+    (the default) the first time is recorded as a warning. On a fixed circle N
+    can vanish only above the centre's height (cos phi < 0): a body whose
+    weight moment exceeds the system's whole energy never gets there. Bodies in
+    a cluster on the circle are checked with these free-body forces; on a path
+    track (``contact_pushes``: per-body clusters) the driving force includes the
+    contact forces along the path; the contact forces' share of N is not
+    included (see README). ``stuck_of``: a cluster member's stuck parameter (a
+    stuck cluster is held by static friction as a whole: its members do not roll).
     """
     mu = scene.track_friction
+    contact_pushes, stuck_of = contact_pushes or {}, stuck_of or {}
     events, exprs = [], []
     for u, unit in enumerate(units):
         for k, o in zip(unit.members, unit.offsets):
@@ -959,7 +979,7 @@ def _track_events(scene: Scene, reach: EnergyReach, units, psi, dpsi, par, body_
             reach_top_half = reach.top_half[k]
             # A free rolling body on a rough track slips and rolls again (simulation.friction); inside
             # a cluster slipping is not modelled: the run stops there.
-            slips = mu is not None and body.kappa > 1 and unit.is_cluster
+            slips = mu is not None and body.kappa > 1 and (unit.is_cluster or k in contact_pushes)
             if not (reach_top_half or slips):
                 continue
             terms = body_terms(k, psi[u] + par(o), dpsi[u], variable=psi[u]) if unit.is_cluster else free_terms[k]
@@ -967,11 +987,13 @@ def _track_events(scene: Scene, reach: EnergyReach, units, psi, dpsi, par, body_
                 events.append(TrackEvent(body=k, kind="left_track", terminal=scene.track_sides == "one"))
                 exprs.append(terms.normal)
             if slips:
-                friction = par(1 - 1 / body.kappa) * terms.driving
-                events.append(TrackEvent(body=k, kind="slip"))
-                exprs.append(par(mu) * terms.normal - friction)
-                events.append(TrackEvent(body=k, kind="slip"))
-                exprs.append(par(mu) * terms.normal + friction)
+                driving = terms.driving + contact_pushes[k] if k in contact_pushes else terms.driving
+                friction = par(1 - 1 / body.kappa) * driving
+                capacity = par(scene.static_coefficient) * terms.normal
+                stuck = stuck_of.get(k)
+                for margin in (capacity - friction, capacity + friction):
+                    events.append(TrackEvent(body=k, kind="slip"))
+                    exprs.append(margin if stuck is None else (1 - stuck) * margin + stuck)
     return events, exprs
 
 
