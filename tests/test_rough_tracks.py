@@ -928,3 +928,24 @@ def test_a_cluster_rising_up_a_steepening_bowl_stops_where_a_member_needs_more_t
     radius = (1 + slope**2) ** 1.5 / 4 - 0.05  # the centre's path: y = 2 x^2's radius of curvature less r
     normal = g / math.sqrt(1 + slope**2) + (sigma(1, q[1]) * v[1]) ** 2 / radius  # N/m, concave side
     assert abs(abs(tangential) - 0.3 * normal) < 1e-6 * normal  # (N without the contact forces' share, as documented)
+
+
+def test_a_rigid_cluster_on_a_rough_circle_slips_where_the_contact_force_makes_a_member_need_mu_s_n():
+    # A ring and a disk (same r and m) start touching, moving up together: one rigid cluster, psi'' =
+    # -(W1 sin phi1 + W2 sin phi2) / (G1 + G2). The ring needs F = (kappa - 1) m rho |psi''| (its contact force
+    # included; free-body forces alone gave (1 - 1/kappa) m g sin phi) and slips where that reaches mu_s N.
+    ring, disk = Body.of_shape("ring", "0.1", mass=1), Body.of_shape("disk", "0.1", mass=1)
+    rho, g = 0.9, 9.81
+    half = math.asin(0.2 / (2 * rho))  # touching: the centres 2 r apart
+    scene = Scene.make(CircleTrack.of_radius(1), [ring, disk], phi=[repr(-half), repr(half)], dphi=["3", "3"],
+                       law=make_law("newton", 0), friction="0.3", static_friction="0.3", g=G,
+                       run=RunSettings.make(2))
+    result = simulate(scene)
+    assert result.status is Status.SLIP and result.message.startswith("body 1 starts to slip"), result.message
+    assert [m.clusters for m in result.mode_changes] == [(), ((1, 2),)]
+    phi = np.asarray(result.final_state[:2], dtype=float)
+    rate = float(result.final_state[2])
+    acc = -g * rho * (math.sin(phi[0]) + math.sin(phi[1])) / ((2 + 1.5) * rho**2)
+    need = (2 - 1) * rho * abs(acc)
+    assert need == pytest.approx(0.3 * (rho * rate**2 + g * math.cos(phi[0])), rel=1e-12)
+    assert (1.5 - 1) * rho * abs(acc) < 0.3 * (rho * rate**2 + g * math.cos(phi[1]))  # the disk holds

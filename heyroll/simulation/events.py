@@ -420,7 +420,8 @@ def _stopper(log, reason, data):
 def _track_stopper(log, event, holder, system):
     what = {
         "left_track": "would leave the track: its normal force N (on a circle m (rho phi'^2 + g cos phi)) reaches 0",
-        "slip": "starts to slip: the friction needed to roll, (1 - 1/kappa) times the driving force, exceeds mu_s N",
+        "slip": "starts to slip: the friction needed to roll, (1 - 1/kappa) times the force along the track (its "
+                "cluster's contact forces included), exceeds mu_s N",
     }[event.kind]
 
     def stop(ta, d_sgn):

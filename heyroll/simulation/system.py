@@ -596,6 +596,10 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
                         if forces:
                             acc = acc + par(1 / total) * hy.sum(forces) if len(forces) > 1 \
                                 else acc + par(1 / total) * forces[0]
+                        for k in unit.members:  # the contact forces along the track (as on a path track, above)
+                            if not slides(scene.bodies[k]):
+                                contact_pushes[k] = par(scene.bodies[k].kappa) * terms[k].sigma * (
+                                    acc - terms[k].acceleration)
                         acc = (1 - stuck) * acc
                 accelerations.append(acc)
     equations = [(psi[c], dpsi[c]) for c in range(nc)] + [(dpsi[c], accelerations[c]) for c in range(nc)]
@@ -964,9 +968,8 @@ def _track_events(scene: Scene, reach: EnergyReach, units, psi, dpsi, par, body_
     (the default) the first time is recorded as a warning. On a fixed circle N
     can vanish only above the centre's height (cos phi < 0): a body whose
     weight moment exceeds the system's whole energy never gets there. Bodies in
-    a cluster on the circle are checked with these free-body forces; on a path
-    track (``contact_pushes``: per-body clusters) the driving force includes the
-    contact forces along the path; the contact forces' share of N is not
+    a cluster are checked with the driving force and the contact forces along
+    the track (``contact_pushes``); the contact forces' share of N is not
     included (see README). ``stuck_of``: a cluster member's stuck parameter (a
     stuck cluster is held by static friction as a whole: its members do not roll).
     """
