@@ -50,15 +50,6 @@ def body_function(system):
     return _compiled(("body", system.shape), outputs, system.variables, system.precision)
 
 
-def slip_margin_function(system):
-    """``f(state, pars, time) -> array``: mu_s N -/+ the friction rolling needs, for each cluster member
-    whose slip an event watches (``system.track_events`` of kind 'slip', in order), or None."""
-    outputs = [x for x, ev in zip(system.track_expressions, system.track_events) if ev.kind == "slip"]
-    if not outputs:
-        return None
-    return _compiled(("slip margins", system.shape), outputs, system.variables, system.precision)
-
-
 def motion_function(system):
     """``f(state, pars, time) -> array``: psi'' and psi\'\'\' per unit (the circle with friction or forcing), or None."""
     outputs = [x for values in system.unit_motion for x in values]

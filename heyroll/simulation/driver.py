@@ -33,7 +33,7 @@ from .resolve.friction import FrictionState, initial_modes
 from .compiled_cache import CompiledCache, by_constants, by_scene
 from .precision import Precision
 from .result import SimulationResult, Status, counted, passage_table
-from .contact_function import body_function, evaluate, slip_margin_function
+from .contact_function import body_function, evaluate
 from .resolve.bounds import left_track_message, parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
 from .system import (
@@ -336,7 +336,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             params = parameters_on_pieces(scene, system, pieces) if system.piece_blocks else list(system.parameters)
             ta.pars[:] = params[: len(ta.pars)]  # heyoka keeps those up to the last one used
             if system.per_body and (system.links or any(u.pinned for u in units)):
-                full_state = project_onto_contacts(system, full_state, params)
+                full_state = project_onto_contacts(system, full_state, params, friction)
             ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra
             ta.dtime = t
             if slots:
@@ -374,10 +374,8 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                     full_state = system.expand(ta.state.tolist())
                     modes[-1] = ModeChange(modes[-1].t, modes[-1].clusters, tuple(full_state), modes[-1].pinned)
                 overlap = _overlap(scene, precision, full_state, "at the start of a mode")
-                problem = ("overlap", overlap) if overlap else \
-                    _slip_at_start(system, ta, holder[1]) if friction_modes is not None else None
-                if problem:
-                    log.stop.reason, log.stop.message = problem
+                if overlap:
+                    log.stop.reason, log.stop.message = "overlap", overlap
                 else:
                     optimized = _optimized_successor(system, options, cooldown, handlers, warnings, holder, stream) \
                         if quick else None
@@ -390,20 +388,6 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                 friction_modes.finish(ta.state)
             t = ta.dtime
             reason = log.stop.reason
-            if reason == "merge" and friction is not None:
-                contact = system.contacts[log.stop.data["contact"]]
-                slipping_bodies = [k for k in (contact.pair.i, contact.pair.j)
-                                   if scene.bodies[k].kappa != 1 and friction.modes[k] in ("sliding+", "sliding-")]
-                if slipping_bodies:
-                    # A cluster's members roll (or stick) together; a body that slips would keep its
-                    # spin apart from the cluster's motion: not modelled (review: its spin energy vanished
-                    # at the merge and its old slip came back at the split, energy created).
-                    log.stop.reason = "slip"
-                    log.stop.message = (
-                        f"body {slipping_bodies[0] + 1} slips as it enters persistent contact with body "
-                        f"{(contact.pair.j if slipping_bodies[0] == contact.pair.i else contact.pair.i) + 1} at t = "
-                        f"{float(t[0]):.17g} s: slipping inside a cluster is not modelled; stopped")
-                    break
             if reason in ("merge", "split", "release", "rest"):
                 overlap = _overlap(scene, precision, full_state, "at the end of a mode")
                 if overlap:
@@ -430,7 +414,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                     intervals.append({"i": i + 1, "j": j + 1, "t_start": contacts_open.pop((i, j)), "t_end": float(t[0])})
             elif reason == "merge":
                 contact = system.contacts[log.stop.data["contact"]]
-                units, full_state = _merge(scene, system, units, contact, full_state)
+                units, full_state = _merge(scene, system, units, contact, full_state, friction)
                 contacts_open[(contact.pair.i, contact.pair.j)] = float(t[0])
             elif reason == "split":
                 link = system.links[log.stop.data["link"]]
@@ -587,27 +571,6 @@ def _join(scene, units, a, b):
     return units[:a] + (merged,) + units[b + 1:]
 
 
-def _slip_at_start(system, ta, pars):
-    """("slip", why) where a cluster member needs more friction to roll than mu_s N as its mode starts, or None.
-
-    Its slip events watch the margin fall through 0; a cluster that forms (or a run that starts) with the
-    margin already below 0 would roll on unwatched (review)."""
-    function = slip_margin_function(system)
-    if function is None:
-        return None
-    margins = evaluate(function, ta.state, pars, ta.time)
-    watched = [ev for ev in system.track_events if ev.kind == "slip"]
-    for ev, margin in zip(watched, margins):
-        if float(margin) < 0:
-            full = system.expand(ta.state.tolist())
-            c, k = system.coordinate, ev.body
-            return "slip", (f"body {k + 1} would slip in its cluster as the contact mode starts: the friction "
-                            f"needed to roll exceeds mu_s N, at {c} = {float(full[k]):.17g}, "
-                            f"d{c} = {float(full[system.n_bodies + k]):.17g}, t = {float(ta.time):.17g} s; "
-                            "slipping inside a cluster is not modelled; stopped")
-    return None
-
-
 def _release(units, bodies) -> tuple:
     """The units holding ``bodies`` fall apart into free bodies; returns (units, the contacts opened)."""
     out, opened = [], []
@@ -620,22 +583,29 @@ def _release(units, bodies) -> tuple:
     return tuple(out), opened
 
 
-def _merge(scene, system, units, contact, full_state):
+def _merge(scene, system, units, contact, full_state, friction=None):
     """Units a and b become one cluster; their rates become the common rate (plastic).
 
     The generalized momentum sum G psi' is kept; what the remaining bounces
     would have dissipated (below the run's resolution) is dissipated here.
+    On a rough track (``friction``: the run's FrictionState) a member that slips
+    takes part with its translational inertia G / kappa, its spin unchanged: its
+    slip changes by rho times its rate's jump.
     """
     a, b = contact.unit_a, contact.unit_b
     nb = len(scene.bodies)
     members = units[a].members + units[b].members
-    G = system.gen_mass
+    slipping = {k for k in members if friction is not None and scene.bodies[k].kappa != 1
+                and friction.modes[k] in ("sliding+", "sliding-")}
+    G = [g / float(scene.bodies[k].kappa) if k in slipping else g for k, g in enumerate(system.gen_mass)]
     momentum = sum(G[k] * full_state[nb + k] for k in members)
     rate = momentum / sum(G[k] for k in members)
     merged = cluster_unit(scene, members)
     first = full_state[members[0]]
     for k, o in zip(members, merged.offsets):
         full_state[k] = first + system.precision.number(o)
+        if k in slipping:  # (the circle: sigma = rho, constant)
+            friction.slips[k] = friction.slips[k] + system.precision.number(scene.sigma(k)) * (rate - full_state[nb + k])
         full_state[nb + k] = rate
     if b == 0:  # across the top: the merged unit comes first, others keep their order
         new_units = (merged,) + tuple(units[1:a])
@@ -949,8 +919,8 @@ def _status(log, outcome, t_end) -> tuple[Status, str]:
         return Status.INCONSISTENT, log.stop.message
     if reason == "interrupted":
         return Status.INTERRUPTED, log.stop.message
-    if reason in ("left_track", "slip"):
-        return Status(reason), log.stop.message
+    if reason == "left_track":
+        return Status.LEFT_TRACK, log.stop.message
     if reason == "overlap":
         return Status.OVERLAP, log.stop.message
     if reason == "failed":

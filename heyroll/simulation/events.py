@@ -420,8 +420,6 @@ def _stopper(log, reason, data):
 def _track_stopper(log, event, holder, system):
     what = {
         "left_track": "would leave the track: its normal force N (on a circle m (rho phi'^2 + g cos phi)) reaches 0",
-        "slip": "starts to slip: the friction needed to roll, (1 - 1/kappa) times the force along the track (its "
-                "cluster's contact forces included), exceeds mu_s N",
     }[event.kind]
 
     def stop(ta, d_sgn):
@@ -1139,12 +1137,13 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
         before = system.expand(state)
         va, vb = state[nu + a], state[nu + b]
         flag = 0 if both_free else 2
-        if system.friction_blocks and (slipping(holder, pair.i, scene) or slipping(holder, pair.j, scene)):
+        members = system.units[a].members + system.units[b].members
+        if system.friction_blocks and any(slipping(holder, k, scene) for k in members):
             if both_free:
                 va_new, vb_new = _slipping_map(scene, system, pair.i, pair.j, holder).apply(va, vb)
                 flag = 3
-            else:  # a cluster and a slipping body: its translational mass in Newton's law between units
-                slips = tuple((k, scene.bodies[k].kappa) for k in (pair.i, pair.j) if slipping(holder, k, scene))
+            else:  # slipping bodies (free or in a cluster): their translational mass in Newton's law between units
+                slips = tuple((k, scene.bodies[k].kappa) for k in members if slipping(holder, k, scene))
                 va_new, vb_new = working_map(unit_map(system, a, b, scene.law.restitution, slips),
                                              system.precision).apply(va, vb)
         else:

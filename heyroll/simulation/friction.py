@@ -27,6 +27,10 @@ and N the magnitude of the track's reaction:
   (from the energy balance d/dt[m v^2/2 + m (kappa - 1) u^2/2] = F (v - u), whatever the
   track's curvature), so the slip obeys w' = T - s mu N kappa / (kappa - 1). Where w
   returns to 0 it rolls again if |F| <= mu_s N, else it slips the other way.
+* a rolling member of a cluster (bodies in persistent contact) has a block of its own:
+  it rolls or slips as a free rolling body does, with its cluster's contact forces
+  in its centre's acceleration; slipping, its inertia in the cluster is m sigma^2
+  (:func:`member_slip_terms`).
 
 N: in a fixed plane the in-plane reaction N_in (BodyTerms.normal); on a
 two-sided track its magnitude, the side it pushes from switched by an event where
@@ -54,8 +58,8 @@ MODES = ("rolling", "sliding+", "sliding-", "stuck")
 class FrictionBlock:
     """The friction mode of one unit, as parameter and state indices of a system.
 
-    ``rolls``: a single rolling body (modes rolling / sliding+ / sliding-, slip state
-    ``slip``); otherwise a particle or a cluster (sliding+ / sliding- / stuck). The
+    ``rolls``: a rolling body, free or a member of a cluster (modes rolling / sliding+ /
+    sliding-, slip state ``slip``); otherwise a particle or a cluster (sliding+ / sliding- / stuck). The
     unit's rate is the state's entry ``rate`` (its first member's).
     """
 
@@ -70,6 +74,9 @@ class FrictionBlock:
     slip: int = -1
     #: State index of the work friction has dissipated in this contact mode (J).
     work: int = -1
+    #: A rolling member's own block inside a cluster (it rolls or slips while its cluster's block
+    #: slides or sticks; ``stuck`` is the cluster's parameter).
+    within: bool = False
 
 
 @dataclass(frozen=True)
@@ -104,15 +111,21 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
     expressions of body k's coordinate and rate; ``slip_vars``: a new state variable per
     rolling free body, in unit order. (``q_of(k)`` is the state variable body k's position depends
     on: a cluster member's position is psi + o.) Returns
-    ``(blocks, body_acc, slip_equations, unit_sums, values)`` with ``body_acc[k]`` body k's
+    ``(blocks, body_acc, slip_equations, unit_sums, values, work, within)`` with ``body_acc[k]`` body k's
     q'' with friction (free units and per-body clusters), ``unit_sums[u]`` = ({member: its
     generalized friction force -s mu m N sigma}, the stuck parameter) of a cluster on the circle, ``values`` per block
     [load, static capacity, sigma of the first member] as expressions (the callbacks' decisions).
+
+    Each rolling member of a cluster has a block of its own (``within``): it rolls or slips inside its
+    cluster. Its slip equation, its load and its inertia in the cluster's motion depend on the contact
+    forces, which the system solves after: ``within`` lists, per such block, (block, body, slip variable,
+    rolling and sign parameters, N, rolling terms, sliding terms); its slip equation and load are None
+    here (:func:`member_slip_terms`).
     """
     mu = scene.track_friction
     mu_s = scene.static_coefficient
     two_sided_fixed = scene.track_sides == "two" and not scene.frame.rotating
-    blocks, body_acc, slip_eqs, unit_sums, values, work = [], {}, [], {}, [], []
+    blocks, body_acc, slip_eqs, unit_sums, values, work, within = [], {}, [], {}, [], [], []
     slips = iter(slip_vars)
     for u, unit in enumerate(units):
         members = unit.members
@@ -148,6 +161,7 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
         # Particles, and clusters: the members share the mode. Rolling members of a cluster roll
         # (their friction is internal to rolling); the particles' friction acts on the cluster.
         loads, capacity, member_friction, power = [], [], {}, []
+        own = len(members) > 1  # rolling members with blocks of their own (below)
         for k in members:
             body = scene.bodies[k]
             weight = par(body.mass) * terms[k].sigma  # generalized forces: force x sigma
@@ -158,7 +172,7 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
                 power.append(-member_friction[k] * v_of(k))  # mu m N sigma |q'| (s q' = |q'|)
                 if per_body or len(members) == 1:
                     body_acc[k] = (1 - stuck) * (terms[k].acceleration - sign * par(mu) * normals[k] / terms[k].sigma)
-            elif per_body or len(members) == 1:
+            elif (per_body or len(members) == 1) and not own:
                 body_acc[k] = (1 - stuck) * terms[k].acceleration
         if len(members) > 1 and not per_body:
             unit_sums[u] = (member_friction, stuck)
@@ -168,7 +182,51 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
         values.append([hy.sum(loads) if len(loads) > 1 else loads[0],
                        par(mu_s) * (hy.sum(capacity) if len(capacity) > 1 else capacity[0]) if capacity else par(0),
                        terms[first].sigma, terms[first].normal])
-    return blocks, body_acc, slip_eqs, unit_sums, values, work
+        if not own:
+            continue
+        for k in members:
+            body = scene.bodies[k]
+            if slides(body):
+                continue
+            # A rolling member: rolling (its rolling equation, inertia kappa m) or slipping (its centre a
+            # particle's with the friction -s mu N, inertia m; its spin takes the friction's moment)
+            rolling_k, sign_k = _new_par(par, 1), _new_par(par, 1)
+            rolling, s_k = hy.par[rolling_k], hy.par[sign_k]
+            t_roll, t_slide = terms[k], slide_terms(k)
+            n_mag = normals[k]
+            sliding_acc = t_slide.acceleration - s_k * par(mu) * n_mag / t_slide.sigma
+            body_acc[k] = (1 - stuck) * (rolling * t_roll.acceleration + (1 - rolling) * sliding_acc)
+            w = next(slips)
+            slip_eqs.append((w, None))
+            work.append((1 - rolling) * s_k * par(mu * body.mass) * n_mag * w)
+            within.append((len(blocks), k, w, rolling, s_k, n_mag, t_roll, t_slide))
+            blocks.append(FrictionBlock(unit=u, members=(k,), rate=-1, rolls=True, stuck=stuck_i, sign=sign_k,
+                                        rolling=rolling_k, side=-1, slip=-1, within=True))
+            values.append([None, par(mu_s) * n_mag, t_roll.sigma, t_roll.normal])
+    return blocks, body_acc, slip_eqs, unit_sums, values, work, within
+
+
+def member_slip_terms(scene, member, acceleration, rolling_acceleration, q, v, par):
+    """A rolling member's slip equation, the friction its rolling needs now (for its slip events) and
+    the friction it would need rolling (for the callbacks' decisions), from its cluster's contact forces.
+
+    ``member``: an entry of build_friction's ``within``; ``acceleration``: its q'' with the contact forces
+    (the mode's); ``rolling_acceleration``: the same with this member rolling; ``q``, ``v``: the state
+    variables its position and rate are. Rolling, kappa m v_C' = m T + F_c, so the friction is
+    F = (1 - 1/kappa)(m T + F_c) = (kappa - 1) m v_C', v_C' = sigma q'' + sigma_q q'^2 its centre's tangential
+    acceleration; slipping, the spin's u' = s mu N / (kappa - 1) and w' = v_C' - u'.
+    """
+    _b, k, w, rolling, sign, n_mag, t_roll, _t_slide = member
+    kappa = scene.bodies[k].kappa
+    sigma = t_roll.sigma
+    spread = hy.diff(sigma, q) * v * v
+    with workprec():
+        spin = 1 / (kappa - 1)
+        grip = kappa - 1
+    slip_eq = (1 - rolling) * (sigma * acceleration + spread - sign * par(scene.track_friction * spin) * n_mag)
+    need_now = par(grip) * (sigma * acceleration + spread)
+    need_rolling = par(grip) * (sigma * rolling_acceleration + spread)
+    return (w, slip_eq), need_now, need_rolling
 
 
 def _new_par(par, value) -> int:
@@ -177,18 +235,24 @@ def _new_par(par, value) -> int:
     return int(str(expr)[1:])
 
 
-def friction_events(scene, blocks, values, rate_of, slip_of, normal_of):
+def friction_events(scene, blocks, values, rate_of, slip_of, normal_of, loads=None):
     """(events, expressions) of the blocks, gated by their mode parameters (see the module doc):
-    an expression that is the constant 1 outside its mode has no root there."""
+    an expression that is the constant 1 outside its mode has no root there. ``loads``: per block, the
+    load its events watch where it is not the callbacks' (a rolling member of a cluster: the friction it
+    needs in the mode's own contact forces)."""
     events, exprs = [], []
     for b, block in enumerate(blocks):
         load, capacity = values[b][:2]
+        if loads and b in loads:
+            load = loads[b]
         if block.rolls:
             rolling = hy.par[block.rolling]
             events += [FrictionEvent(b, "slip+"), FrictionEvent(b, "slip-"), FrictionEvent(b, "reroll")]
-            exprs += [rolling * (capacity - load) + (1 - rolling),
-                      rolling * (capacity + load) + (1 - rolling),
-                      slip_of(b) + rolling]
+            slip_margins = [rolling * (capacity - load) + (1 - rolling), rolling * (capacity + load) + (1 - rolling)]
+            if block.within:  # a stuck cluster holds its members (its own release events watch the load)
+                stuck = hy.par[block.stuck]
+                slip_margins = [(1 - stuck) * m + stuck for m in slip_margins]
+            exprs += slip_margins + [slip_of(b) + rolling]
         else:
             stuck = hy.par[block.stuck]
             events += [FrictionEvent(b, "turn"), FrictionEvent(b, "release+"), FrictionEvent(b, "release-")]

@@ -32,7 +32,6 @@ class Status(str, Enum):
     INCONSISTENT = "inconsistent_collision"
     INTERRUPTED = "interrupted"
     LEFT_TRACK = "left_track"
-    SLIP = "slip"
     OVERLAP = "overlap"
     FAILED = "failed"
 
@@ -56,7 +55,6 @@ _MEANINGS = {
     Status.INCONSISTENT: "the law's outcome would leave two bodies approaching (on_inconsistent = 'error')",
     Status.INTERRUPTED: "stopped by Ctrl-C or SIGTERM; the table holds every collision before the stop",
     Status.LEFT_TRACK: "a body would leave a one-sided track (its normal force reached 0)",
-    Status.SLIP: "the friction needed to roll exceeded mu N",
     Status.OVERLAP: "a collision was missed (the bodies overlapped by more than the overlap tolerance)",
     Status.FAILED: "the integrator could not go on",
 }

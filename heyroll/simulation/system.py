@@ -49,7 +49,7 @@ from ..model._numbers import workprec
 from ..model.scene import ContactPair, Scene
 from ..model.tracks import Dynamics
 from .compiled_cache import CompiledCache, HashedKey, by_constants, by_scene
-from .friction import build_friction, forcing_terms, friction_events, slides
+from .friction import build_friction, forcing_terms, friction_events, member_slip_terms, slides
 from .precision import Precision
 
 #: Interpenetration allowed before a run is declared failed (status overlap):
@@ -117,9 +117,9 @@ class ContactLink:
 
 @dataclass(frozen=True)
 class TrackEvent:
-    """Where the track stops holding a body: ``kind`` is 'left_track' or 'slip'.
+    """Where the track stops holding a body: ``kind`` is 'left_track' (its normal force reaches 0).
 
-    ``terminal``: the run stops there (a one-sided track, or slipping);
+    ``terminal``: the run stops there (a one-sided track);
     otherwise (a two-sided track) the first time is only recorded.
     """
 
@@ -518,8 +518,10 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
         return forcing_terms(scene, k, term, q if variable is None else variable, body.kappa, par)
 
     rough = scene.rough
-    contact_pushes: dict = {}  # per-body clusters on a rough track (below)
-    n_rolls = sum(1 for u in units if len(u.members) == 1 and not slides(scene.bodies[u.members[0]])) if rough else 0
+    member_loads: dict = {}  # clusters' rolling members: the friction they need now (below)
+    member_slips: dict = {}  # unit -> {member: its rolling parameter, slip friction, inertia lost slipping}
+    # a slip velocity per rolling body, free or in a cluster (friction.build_friction)
+    n_rolls = sum(1 for u in units for k in u.members if not slides(scene.bodies[k])) if rough else 0
     slip_vars = _vars("w", n_rolls) if n_rolls else []
     friction = None
     work_vars: list = []
@@ -554,24 +556,35 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
             for k, acc in friction[1].items():
                 terms[k] = dataclasses.replace(terms[k], acceleration=acc)
         if per_body:
+            # A rolling member of a cluster that slips takes part in the contacts with its translational
+            # inertia m (kappa_eff = 1), rolling with kappa m (friction.build_friction's own blocks)
+            within = friction[6] if rough else []
+            inertia = {member[1]: 1 + member[3] * par(scene.bodies[member[1]].kappa - 1) for member in within}
             accelerations, links, link_exprs, link_terms = _constrained_accelerations(
-                scene, units, terms, psi, dpsi, par, events)
+                scene, units, terms, psi, dpsi, par, events, inertia)
             if rough:
-                # A rolling member's contact force along its path, per unit mass: kappa m sigma^2 q'' =
-                # kappa m sigma^2 a_k + Q_k, so Q_k / (m sigma) = kappa sigma (q'' - a_k). Rolling needs
-                # the friction (1 - 1/kappa) (T + Q_k / (m sigma)) (review: without it no event watched
-                # a cluster member's slip on a path track, and a cluster rolled up slopes mu cannot hold).
-                for unit in units:
-                    if unit.is_cluster and not unit.pinned:
-                        for k in unit.members:
-                            if not slides(scene.bodies[k]):
-                                contact_pushes[k] = par(scene.bodies[k].kappa) * terms[k].sigma * (
-                                    accelerations[k] - terms[k].acceleration)
                 for block in friction[0]:
                     if len(block.members) > 1:  # a stuck cluster does not move, whatever its contacts
                         for k in block.members:
                             accelerations[k] = (1 - hy.par[block.stuck]) * accelerations[k]
+                slip_numbers = [b for b, block in enumerate(friction[0]) if block.rolls]  # slip_eqs' order
+                for member in within:
+                    b, k, _w, _rolling, _sign, _n, t_roll, _t = member
+                    # the friction its rolling would need: the contact forces solved with it rolling
+                    as_rolling = dict(inertia)
+                    as_rolling[k] = par(scene.bodies[k].kappa)
+                    rolling_terms = list(terms)
+                    rolling_terms[k] = dataclasses.replace(terms[k], acceleration=t_roll.acceleration)
+                    rolling_acc = _constrained_accelerations(
+                        scene, units, rolling_terms, psi, dpsi, par, False, as_rolling)[0]
+                    slip_eq, need_now, need_rolling = member_slip_terms(
+                        scene, member, accelerations[k], rolling_acc[k], psi[k], dpsi[k], par)
+                    friction[2][slip_numbers.index(b)] = slip_eq
+                    friction[4][b][0] = need_rolling
+                    member_loads[b] = need_now
         else:
+            within = friction[6] if rough else []
+            slip_numbers = [b for b, block in enumerate(friction[0]) if block.rolls] if rough else []
             for u, unit in enumerate(units):
                 if not unit.is_cluster:
                     acc = terms[unit.members[0]].acceleration
@@ -596,16 +609,23 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
                         if forces:
                             acc = acc + par(1 / total) * hy.sum(forces) if len(forces) > 1 \
                                 else acc + par(1 / total) * forces[0]
-                        for k in unit.members:  # the contact forces along the track (as on a path track, above)
-                            if not slides(scene.bodies[k]):
-                                contact_pushes[k] = par(scene.bodies[k].kappa) * terms[k].sigma * (
-                                    acc - terms[k].acceleration)
+                        members = [m for m in within if m[1] in unit.members]
+                        if members:
+                            acc, rolling_accs = _slipping_members_motion(scene, members, acc, total, G, par)
+                            member_slips[u] = {m[1]: _member_slip(scene, m, G, par) for m in members}
+                            for member, rolling_acc in zip(members, rolling_accs):
+                                b, k = member[0], member[1]
+                                slip_eq, need_now, need_rolling = member_slip_terms(
+                                    scene, member, (1 - stuck) * acc, rolling_acc, psi[u], dpsi[u], par)
+                                friction[2][slip_numbers.index(b)] = slip_eq
+                                friction[4][b][0] = need_rolling
+                                member_loads[b] = need_now
                         acc = (1 - stuck) * acc
                 accelerations.append(acc)
     equations = [(psi[c], dpsi[c]) for c in range(nc)] + [(dpsi[c], accelerations[c]) for c in range(nc)]
     friction_blocks, friction_events_, friction_exprs, friction_values = (), (), [], []
     if rough:
-        blocks_f, _, slip_eqs, _, friction_values, powers = friction
+        blocks_f, _, slip_eqs, _, friction_values, powers, _within = friction
         work_vars = _vars("D", len(blocks_f))
         equations += slip_eqs + list(zip(work_vars, powers))
         slip_index = {}
@@ -632,7 +652,7 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
                 scene, friction_blocks, friction_values,
                 lambda block: dpsi[block.rate - nc],
                 lambda b: slip_vars[slip_index[b]],
-                lambda block: terms[block.members[0]].normal)
+                lambda block: terms[block.members[0]].normal, member_loads)
             friction_events_ = tuple(evs)
 
     def at(k):  # a body's place in the state
@@ -706,6 +726,9 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
             partial.append(own - par(G[k]) * accelerations[u])
             if k in member_friction:
                 partial.append(member_friction[k])
+            if k in member_slips.get(u, {}):  # slipping: its inertia is m rho^2, and friction acts on its centre
+                rolling, slip_friction, lost = member_slips[u][k]
+                partial.append((1 - rolling) * (lost * accelerations[u] + slip_friction))
             links.append(ContactLink(unit=u, position=m, pair_index=scene_pair_index(scene, k, unit.members[m + 1])))
             link = hy.sum(list(partial) + [par(slack)])
             # A stuck cluster's contact forces are statically indeterminate: it splits once it moves.
@@ -737,10 +760,7 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
         # sin((nu t + psi)/2) vanishes once a forcing period, at nu t + psi = 2 pi n.
         strobe = hy.sin(par(scene.forcing.frequency / 2) * hy.time + par(scene.forcing.phase / 2))
     track_units = singleton_units(n) if per_body else units
-    stuck_of = {k: hy.par[block.stuck] for block in friction[0] if len(block.members) > 1
-                for k in block.members} if rough else {}
-    track_events, track_exprs = (_track_events(scene, reach, track_units, psi, dpsi, par, body_terms, terms,
-                                               contact_pushes, stuck_of)
+    track_events, track_exprs = (_track_events(scene, reach, track_units, psi, dpsi, par, body_terms, terms)
                                  if events else ([], []))
     if per_body:
         body_exprs = [[t.x_c, t.y_c, t.normal, t.sigma, t.driving, a] for t, a in zip(terms, accelerations)]
@@ -853,7 +873,7 @@ def _contact_terms(gap, ti, tj, qi, qj, vi, vj, ai, aj) -> list:
     return [gap, gi, gj, ti.sigma, tj.sigma, acc, d_dt(acc)]
 
 
-def _constrained_accelerations(scene, units, terms, q, v, par, events):
+def _constrained_accelerations(scene, units, terms, q, v, par, events, inertia=None):
     """Each body's q'' with the contacts inside clusters as holonomic constraints (tracks whose gap is not linear).
 
     A cluster's links l (members m_l, m_l+1) keep their gap g_l = |C_i - C_j| - r_i - r_j
@@ -868,7 +888,8 @@ def _constrained_accelerations(scene, units, terms, q, v, par, events):
     event). The drift of the constraint under round-off is damped (Baumgarte):
     h'' + 2 alpha h' + alpha^2 h = 0, alpha the inverse of the motion's time
     scale sqrt(L/g); the exact constrained motion (h = h' = 0) is unchanged.
-    Pinned units (resting on a limiter) do not move. Returns (accelerations,
+    Pinned units (resting on a limiter) do not move. ``inertia[k]``: member k's kappa_eff where it is not
+    its kappa (a rolling body that may slip on a rough track: 1 while it slips). Returns (accelerations,
     links, their lambda expressions, their [gap, dg/dq_i, dg/dq_j]).
     """
     track = scene.track
@@ -885,7 +906,9 @@ def _constrained_accelerations(scene, units, terms, q, v, par, events):
         if not unit.is_cluster:
             continue
         members = unit.members
-        M = [par(scene.bodies[k].kappa * scene.bodies[k].mass) * terms[k].sigma * terms[k].sigma for k in members]
+        inertia = inertia or {}
+        M = [(par(scene.bodies[k].mass) * inertia[k] if k in inertia else par(scene.bodies[k].kappa * scene.bodies[k].mass))
+             * terms[k].sigma * terms[k].sigma for k in members]
         grads, rhs = [], []
         for i, j in zip(members, members[1:]):
             h, hi, hj, h_rate, h_free = _link_constraint(scene, i, j, terms, q, v, acc, par)
@@ -956,48 +979,58 @@ def _vars(prefix: str, n: int) -> list:
     return [made] if n == 1 else list(made)
 
 
-def _track_events(scene: Scene, reach: EnergyReach, units, psi, dpsi, par, body_terms, free_terms,
-                  contact_pushes=None, stuck_of=None):
-    """Normal force and friction events, only for bodies the energy can take there.
+def _track_events(scene: Scene, reach: EnergyReach, units, psi, dpsi, par, body_terms, free_terms):
+    """Normal force events, only for bodies the energy can take there.
 
     The track pushes with N (per unit mass, :class:`heyroll.model.tracks.BodyTerms`;
-    on the circle N/m = rho phi'^2 + g cos phi) and rolling needs the friction
-    F = (1 - 1/kappa) times the driving force (on the circle m g sin phi
-    (1 - 1/kappa), paper eqs. 21, 25), which static friction holds while
-    |F| <= mu_s N. On a one-sided track N = 0 ends the run; on a two-sided one
-    (the default) the first time is recorded as a warning. On a fixed circle N
-    can vanish only above the centre's height (cos phi < 0): a body whose
-    weight moment exceeds the system's whole energy never gets there. Bodies in
-    a cluster are checked with the driving force and the contact forces along
-    the track (``contact_pushes``); the contact forces' share of N is not
-    included (see README). ``stuck_of``: a cluster member's stuck parameter (a
-    stuck cluster is held by static friction as a whole: its members do not roll).
+    on the circle N/m = rho phi'^2 + g cos phi). On a one-sided track N = 0 ends the
+    run; on a two-sided one (the default) the first time is recorded as a
+    warning. On a fixed circle N can vanish only above the centre's height
+    (cos phi < 0): a body whose weight moment exceeds the system's whole
+    energy never gets there. Bodies in a cluster are checked with these
+    free-body forces (the contact forces' share is not included; see README).
+    (Slipping on a rough track: :mod:`heyroll.simulation.friction`, for free bodies and cluster members.)
     """
-    mu = scene.track_friction
-    contact_pushes, stuck_of = contact_pushes or {}, stuck_of or {}
     events, exprs = [], []
     for u, unit in enumerate(units):
         for k, o in zip(unit.members, unit.offsets):
-            body = scene.bodies[k]
-            reach_top_half = reach.top_half[k]
-            # A free rolling body on a rough track slips and rolls again (simulation.friction); inside
-            # a cluster slipping is not modelled: the run stops there.
-            slips = mu is not None and body.kappa > 1 and (unit.is_cluster or k in contact_pushes)
-            if not (reach_top_half or slips):
+            if not reach.top_half[k]:
                 continue
             terms = body_terms(k, psi[u] + par(o), dpsi[u], variable=psi[u]) if unit.is_cluster else free_terms[k]
-            if reach_top_half:
-                events.append(TrackEvent(body=k, kind="left_track", terminal=scene.track_sides == "one"))
-                exprs.append(terms.normal)
-            if slips:
-                driving = terms.driving + contact_pushes[k] if k in contact_pushes else terms.driving
-                friction = par(1 - 1 / body.kappa) * driving
-                capacity = par(scene.static_coefficient) * terms.normal
-                stuck = stuck_of.get(k)
-                for margin in (capacity - friction, capacity + friction):
-                    events.append(TrackEvent(body=k, kind="slip"))
-                    exprs.append(margin if stuck is None else (1 - stuck) * margin + stuck)
+            events.append(TrackEvent(body=k, kind="left_track", terminal=scene.track_sides == "one"))
+            exprs.append(terms.normal)
     return events, exprs
+
+
+def _slipping_members_motion(scene, members, acc, total, G, par):
+    """A rigid cluster's psi'' on the circle with rolling members that may slip, and per member the psi''
+    it would have were that member rolling.
+
+    (sum G_eff) psi'' = sum Q_k + the particles' friction + each slipping member's -s mu m N rho: a slipping
+    member's generalized force from gravity, the frame and forcing is the same as rolling (G_k a_k: forces
+    on the centre), its inertia m rho^2 = G_k / kappa_k, and the friction on its centre adds to the sum.
+    ``acc``: psi'' with every member rolling, (sum Q_k + friction) / sum G_k (mpf ``total``)."""
+    generalized = par(total) * acc
+    mass = par(total)
+    pieces = []
+    for member in members:
+        rolling, slip_friction, lost = _member_slip(scene, member, G, par)
+        pieces.append(((1 - rolling) * slip_friction, (1 - rolling) * lost))
+    slipping_force = hy.sum([p[0] for p in pieces]) if len(pieces) > 1 else pieces[0][0]
+    slipping_mass = hy.sum([p[1] for p in pieces]) if len(pieces) > 1 else pieces[0][1]
+    out = (generalized + slipping_force) / (mass - slipping_mass)
+    as_rolling = [(generalized + slipping_force - force) / (mass - slipping_mass + lost) for force, lost in pieces]
+    return out, as_rolling
+
+
+def _member_slip(scene, member, G, par):
+    """(rolling parameter, -s mu m N rho its friction's generalized force, G (1 - 1/kappa) the inertia it
+    loses slipping) of a rolling member of a rigid cluster (friction.build_friction's ``within``)."""
+    _b, k, _w, rolling, sign, n_mag, t_roll, _t = member
+    body = scene.bodies[k]
+    with workprec():
+        lost = G[k] * (1 - 1 / body.kappa)
+    return rolling, -sign * par(scene.track_friction * body.mass) * n_mag * t_roll.sigma, par(lost)
 
 
 def _with_margin(height: float) -> float:

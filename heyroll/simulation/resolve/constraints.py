@@ -26,10 +26,25 @@ from ..system import link_bodies
 POSITION_PASSES = 3
 
 
-def project_onto_contacts(system, state: list, pars) -> list:
-    """The state with every cluster's contacts closed (g = 0, g' = 0) and pinned units at rest."""
+def _translational(friction) -> dict:
+    """Rolling bodies that slip, with their kappa (``friction``: the run's FrictionState, or None): they take
+    part in impulses with their translational mass m (the impulse through the centre leaves the spin)."""
+    if friction is None:
+        return {}
+    bodies = friction.scene.bodies
+    return {k: bodies[k].kappa for k, mode in enumerate(friction.modes)
+            if mode in ("sliding+", "sliding-") and bodies[k].kappa != 1}
+
+
+def project_onto_contacts(system, state: list, pars, friction=None) -> list:
+    """The state with every cluster's contacts closed (g = 0, g' = 0) and pinned units at rest.
+
+    ``friction``: the run's FrictionState on a rough track: a member that slips takes the plastic
+    impulse with its translational mass, and its slip w = sigma q' - u changes by sigma times its
+    rate's jump (its spin u unchanged)."""
     s = list(state)
     n = system.n_bodies
+    slipping = _translational(friction)
     for unit in system.units:
         if unit.pinned:
             for k in unit.members:
@@ -50,7 +65,7 @@ def project_onto_contacts(system, state: list, pars) -> list:
         if not numbers or unit.pinned:
             continue
         members = unit.members
-        M = [system.precision.number(system.rolling_mass[k]) * bodies[BODY_VALUES * k + 3] ** 2 for k in members]
+        M = [_mass(system, k, slipping) * bodies[BODY_VALUES * k + 3] ** 2 for k in members]
         grads = [(values[per_link * m + 1], values[per_link * m + 2]) for m in numbers]
         rates = [gi * s[n + i] + gj * s[n + j] for (gi, gj), (i, j) in zip(grads, zip(members, members[1:]))]
         impulses = _tridiagonal(grads, M, [-r for r in rates], inverse=False)
@@ -60,8 +75,17 @@ def project_onto_contacts(system, state: list, pars) -> list:
                 push = push + impulses[p - 1] * grads[p - 1][1]
             if p < len(grads):
                 push = push + impulses[p] * grads[p][0]
-            s[n + k] = s[n + k] + push / M[p]
+            jump = push / M[p]
+            s[n + k] = s[n + k] + jump
+            if k in slipping:
+                friction.slips[k] = friction.slips[k] + bodies[BODY_VALUES * k + 3] * jump
     return s
+
+
+def _mass(system, k, slipping):
+    """Body k's mass in an impulse: kappa m rolling, m slipping (``slipping``: body -> kappa; its spin
+    untouched), in the run's type."""
+    return system.precision.number(system.rolling_mass[k] / slipping[k] if k in slipping else system.rolling_mass[k])
 
 
 def cluster_impact(system, s, pars, contact, grad, closing, restitution, slipping=()):
@@ -89,8 +113,7 @@ def cluster_impact(system, s, pars, contact, grad, closing, restitution, slippin
     slip = dict(slipping)  # (body, kappa) of rolling bodies that slip: their translational mass m
     for k in chain:
         pinned = system.units[system.unit_of[k]].pinned
-        mass = system.precision.number(system.rolling_mass[k] / slip[k] if k in slip else system.rolling_mass[k])
-        inverse.append(0 if pinned else 1 / (mass * bodies[BODY_VALUES * k + 3] ** 2))
+        inverse.append(0 if pinned else 1 / (_mass(system, k, slip) * bodies[BODY_VALUES * k + 3] ** 2))
     grads, rhs = [], []
     for x, y in zip(chain, chain[1:]):
         if (x, y) == (contact.pair.i, contact.pair.j):
@@ -122,7 +145,7 @@ def cluster_impact(system, s, pars, contact, grad, closing, restitution, slippin
     return out
 
 
-def stop_impact(system, s, pars, k, upper: bool, restitution):
+def stop_impact(system, s, pars, k, upper: bool, restitution, slipping=()):
     """A member of a cluster hits a stop (a limiter): Newton's law on the gap to the stop with the
     cluster kept rigid through the impact, as when a body hits a cluster (:func:`cluster_impact`).
 
@@ -144,8 +167,8 @@ def stop_impact(system, s, pars, k, upper: bool, restitution):
         return None
     link_values = evaluate(links, s, pars).tolist()
     bodies = evaluate(body_function(system), s, pars).tolist()
-    inverse = [1 / (system.precision.number(system.rolling_mass[m]) * bodies[BODY_VALUES * m + 3] ** 2)
-               for m in members]
+    slip = dict(slipping)  # (body, kappa) of rolling members that slip: their translational mass m
+    inverse = [1 / (_mass(system, m, slip) * bodies[BODY_VALUES * m + 3] ** 2) for m in members]
     grads, rhs = [], []
     for x, y in zip(members, members[1:]):
         number = next((m for m, link in enumerate(system.links) if link_bodies(system, link) == (x, y)), None)

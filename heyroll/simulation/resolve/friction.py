@@ -120,6 +120,8 @@ class FrictionModes:
         self.function = friction_function(system)
         self.num = system.precision.number
         self.zero, self.one = self.num(0), self.num(1)
+        #: Rolling members of clusters with blocks of their own (path tracks): body -> its block.
+        self.own = {block.members[0]: block for block in system.friction_blocks if block.within}
 
     # -- parameters ----------------------------------------------------------------------
 
@@ -143,10 +145,18 @@ class FrictionModes:
         """The block's members pass to mode ``new`` (rolling members of a cluster roll, or are stuck);
         ``at``: the state whose positions to record (an impact's, before a limiter moved the body off
         its stop by a few ulps)."""
+        pars = self.holder[1]
         for k in block.members:
             target = new
             if not block.rolls and self.scene.bodies[k].kappa != 1:
                 target = "stuck" if new == "stuck" else "rolling"
+                if k in self.own:  # it rolls or slips by its own block; a stuck cluster holds it where it rolls
+                    held = self.state.modes[k] in ("rolling", "stuck")
+                    if not held:
+                        continue
+                    target = "stuck" if new == "stuck" else "rolling"
+            elif block.within and new == "rolling" and pars[block.stuck] == 1:
+                target = "stuck"  # (rolling again inside a stuck cluster: at rest with it)
             if record:
                 q, dq = self._where(s, k)
                 if at is not None:
@@ -378,8 +388,9 @@ class FrictionModes:
         system = self.system
         pars = self.holder[1]
         values = None
+        previous = list(before)  # (a cluster's block and its members' own blocks share rates)
         for b, block in enumerate(system.friction_blocks):
-            old_rate, rate = before[block.rate], s[block.rate]
+            old_rate, rate = previous[block.rate], s[block.rate]
             if old_rate == rate:
                 continue
             before[block.rate] = rate

@@ -103,7 +103,9 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         seen[:] = (float(acc), gi, gj, float(si), float(sj), float(vi), float(vj))
         if held is not None:
             # A cluster or a unit on a stop takes part: rigid through the impact if its contacts push.
-            slips = tuple((k, scene.bodies[k].kappa) for k in (pair.i, pair.j) if rough and slipping(holder, k, scene))
+            slips = tuple((k, scene.bodies[k].kappa)  # (every member that slips, in either unit)
+                          for k in system.units[contact.unit_a].members + system.units[contact.unit_b].members
+                          if rough and slipping(holder, k, scene))
             rates = cluster_impact(system, s, pars, contact, (gi, gj), gi * vi + gj * vj, law_k, slips)
             if rates is not None:
                 before = s.tolist()
