@@ -601,3 +601,53 @@ def test_a_ball_in_a_corner_that_is_not_square_starts_on_both_walls_in_quad(half
     for precision in ("double", "quad"):
         result = simulate(parse_scene(text), precision=precision)
         assert result.status is Status.COMPLETED and result.n_collisions == 0, (precision, result.message)
+
+
+def test_hedrihs_fallback_on_unequal_radii_is_newtons_law_on_the_rolling_masses_and_keeps_energy_at_k1():
+    """A solid ball (R 0.1) hits a ring (R 0.02) head-on at k = 1: Hedrih's law would leave them approaching; its
+    fallback was Newton's law on the masses m, rolling kept: 0.7 J -> 1.0 J in one impact (review). Newton's law on
+    kappa m gives v1 = (1.4 - 2)/3.4, v2 = 2.8/3.4 and keeps the rolling energy, as the tracks' fallback does."""
+    text = scene_toml('boundary = "rectangle"\nwidth = 4.0\nheight = 4.0',
+                      [ball(-1.0, 0.0, 1.0, 0.0, radius=0.1, mass=1.0), ball(0.0, 0.0, 0.0, 0.0, radius=0.02, mass=1.0,
+                                                                           shape="ring")],
+                      'law = "hedrih"\nrestitution = 1.0', t_end=1.0)
+    result = simulate(parse_scene(text))
+    row = result.collision_table()[0]
+    assert row["law_flag"] == 1
+    assert row["energy_after"] == pytest.approx(row["energy_before"], rel=1e-15) and row["energy_before"] == pytest.approx(0.7)
+    final = np.asarray([float(v) for v in result.state_final]).reshape(2, -1)  # x, y, vx, vy, ...
+    assert final[0, 2] == pytest.approx(-0.6 / 3.4, rel=1e-14) and final[1, 2] == pytest.approx(2.8 / 3.4, rel=1e-14)
+
+
+@pytest.mark.parametrize("offset", [-1e-9, 0.0, 1e-9])
+def test_a_particle_aimed_at_a_60_degree_vertex_leaves_as_its_neighbours_do(offset):
+    """In a corner of pi/3 the orbits just beside the vertex leave after 3 reflections with v mirrored in the line
+    across the corner; the exact hit went through the one simultaneous solution, -v (review). Under 'sequential' the
+    walls are now met one after the other: (0.3, 1) -> (0.3, -1) from either side and at the vertex."""
+    s3 = math.sqrt(3)
+    text = (f'[track]\ntype = "table"\nboundary = "polygon"\nvertices = [[-1, 0], [1, 0], [0, {s3!r}]]\n'
+            f'[[bodies]]\nshape = "particle"\nmass = 1.0\nx = {-0.3 * (s3 - 0.5) + offset!r}\ny = 0.5\nvx = 0.3\nvy = 1.0\n'
+            '[collision]\nsimultaneous = "sequential"\n[run]\nt_end = 1.5\n')
+    result = simulate(parse_scene(text))
+    assert result.status is Status.COMPLETED, result.message
+    final = result.summary()["final_state"][0]
+    assert final["vx"] == pytest.approx(0.3, abs=1e-12) and final["vy"] == pytest.approx(-1.0, abs=1e-12)
+    assert (result.collision_table()["law_flag"] == 0).all()  # every wall by the cushion's law, one row each
+
+
+def test_a_ball_aimed_at_a_square_corner_comes_straight_back_and_a_plastic_acute_corner_stops_it():
+    # n = 2: two reflections give -v; at k = 0 in a 60 degree corner the walls pass the speed between them for ever,
+    # shrinking: the simultaneous solution, the ball at rest in the corner
+    text = ('[track]\ntype = "table"\nboundary = "rectangle"\nwidth = 2.0\nheight = 2.0\n'
+            '[[bodies]]\nshape = "particle"\nmass = 1.0\nx = 0.0\ny = 0.0\nvx = 0.5\nvy = 0.5\n[run]\nt_end = 2.5\n')
+    final = simulate(parse_scene(text)).summary()["final_state"][0]
+    assert (final["vx"], final["vy"]) == (-0.5, -0.5)
+    s3 = math.sqrt(3)
+    text = (f'[track]\ntype = "table"\nboundary = "polygon"\nvertices = [[-1, 0], [1, 0], [0, {s3!r}]]\n'
+            'cushion_restitution = 0.0\n'
+            f'[[bodies]]\nshape = "particle"\nmass = 1.0\nx = {-0.3 * (s3 - 0.5)!r}\ny = 0.5\nvx = 0.3\nvy = 1.0\n'
+            '[run]\nt_end = 1.5\n')
+    result = simulate(parse_scene(text))
+    assert result.status is Status.COMPLETED, result.message
+    final = result.summary()["final_state"][0]
+    assert abs(final["vx"]) < 1e-12 and abs(final["vy"]) < 1e-12
