@@ -498,9 +498,14 @@ def test_ctrl_c_leaves_a_complete_table_and_summary(tmp_path):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 60
-    while time.time() < deadline and not list(tmp_path.glob("out/.collisions.csv.tmp")):
+    table = tmp_path / "out" / ".collisions.csv.tmp"
+    while time.time() < deadline and not table.exists():
         time.sleep(0.2)
-    time.sleep(4.0)  # (2 s left no impact yet once, in a fresh venv on a loaded machine: compilation first)
+    # until rows reach the file (a fixed 4 s left no impact yet on a loaded machine: compilation first)
+    header = table.stat().st_size if table.exists() else 0
+    while time.time() < deadline and (not table.exists() or table.stat().st_size <= header):
+        time.sleep(0.2)
+    time.sleep(0.5)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err

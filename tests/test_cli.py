@@ -11,6 +11,7 @@ import pytest
 
 import heyroll
 from heyroll.interfaces.cli import main
+from heyroll.interfaces.scene_file import load_scene
 
 from conftest import EXAMPLE, body, scene_text
 
@@ -432,3 +433,58 @@ def test_validate_does_not_hold_a_rough_or_forced_scene_to_the_smooth_reference(
         report = (out / "report.md").read_text()
         assert why in report and "Collision times: double and long against quad" in report
     assert "J from 0" in report  # (the forced track starts at energy 0)
+
+
+def test_a_quad_run_writes_its_limiter_impacts_with_36_digits(tmp_path):
+    """passages.csv had 17 digits of a quad run's times (review: 0.84674749675944216 where mpmath's quadrature gives
+    0.846747496759442184838424575); now the run's own numbers, as collisions.csv."""
+    import heyoka
+
+    scene = tmp_path / "limiter.toml"
+    scene.write_text('[track]\ntype = "curve"\ny = "x**2"\nx_min = -0.5\nx_max = 1.0\n'
+                     '[[bodies]]\nshape = "disk"\nradius = 0.05\nmass = 1.0\nx = 0.9\n[run]\nt_end = 1\n')
+    out = tmp_path / "q"
+    assert main(["run", str(scene), "--out", str(out), "--precision", "quad", "--no-figures", "--progress", "off"]) == 0
+    rows = read_csv(out / "passages.csv")
+    result = heyroll.simulate(load_scene(scene), precision="quad")
+    assert len(rows) == len(result.passages) == 1
+    assert len(rows[0]["t"].replace(".", "").lstrip("0")) == 36
+    assert heyoka.real128(rows[0]["t"]) == result.passages[0][0]
+    assert abs(float(rows[0]["t"]) - 0.846747496759442184838424575) < 1e-16
+
+
+def test_a_second_command_writing_into_the_same_out_is_refused_and_leaves_the_first_alone(tmp_path, capsys):
+    """Two runs into one --out: the second's start removed the first's outputs, and the first's end the second's
+    (acceptance test: an empty directory). The second is refused in one line while the first holds the directory."""
+    import signal
+    import time
+
+    out = tmp_path / "shared"
+    proc = subprocess.Popen([sys.executable, "-m", "heyroll.interfaces.cli", "run", "--out", str(out), "--t-end", "1e7",
+                             "--no-figures", "--progress", "off"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.time() + 60
+    while time.time() < deadline and not (out / ".collisions.csv.tmp").exists():
+        time.sleep(0.1)
+    assert main(["run", "--out", str(out), "--max-collisions", "3", "--no-figures", "--progress", "off"]) == 2
+    assert capsys.readouterr().err.strip() == (f"heyroll: error: --out: another heyroll command is writing to {out}: "
+                                               "let it finish or choose another directory")
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
+    assert (out / "collisions.csv").exists() and not (out / ".heyroll.lock").exists()
+
+
+@pytest.mark.parametrize("options, field", [({"tolerance": 2.0}, "tolerance"), ({"tolerance": 0.0}, "tolerance"),
+                                            ({"precision": "single"}, "precision"), ({"t_end": -1.0}, "t_end"),
+                                            ({"max_events": 0}, "max_events")])
+def test_the_api_refuses_bad_run_options_as_the_cli_does_with_one_error_class(options, field):
+    """RunOptions(tolerance=2.0) passed where --tolerance 2 is refused, and a bad precision raised a SceneError where
+    every other option raises OptionsError (acceptance test). (t_end = 0 stays allowed in the API: a zero-length
+    run measures the set-up.)"""
+    from heyroll.simulation.driver import OptionsError
+
+    with pytest.raises(OptionsError) as caught:
+        heyroll.RunOptions(**options)
+    assert caught.value.field == field and isinstance(caught.value, ValueError)

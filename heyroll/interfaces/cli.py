@@ -79,7 +79,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--max-collisions", dest="max_collisions", help="stop after N collisions")
     run.add_argument("--max-events", dest="max_events",
                      help="stop after N events of every kind together: collisions, junction passages, limiter "
-                          "impacts, contact mode changes (default 2000000; 'none' for no limit)")
+                          "impacts, contact mode changes, friction mode changes, stroboscopic samples (default 2000000; 'none' "
+                          "for no limit)")
     run.add_argument(
         "--precision", default="double",
         help="double | long (x87 extended) | quad | mp:BITS: the whole integration, every event and collision "
@@ -91,7 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="heyoka's fast-math flags: faster steps, results no longer reproducible to the last bit "
                           "(validation/reports/work_precision.md)")
     run.add_argument("--high-accuracy", action="store_true", help="heyoka's compensated summation (measured: no gain on collision times or energy, ~1%% cost)")
-    run.add_argument("--no-figures", action="store_true", help="skip the figures (phase_portrait.png, energy.png)")
+    run.add_argument("--no-figures", action="store_true", help="skip the figures (every .png of the run)")
     run.add_argument(
         "--table", choices=("csv", "npy", "parquet"), default="csv",
         help="collision table format: csv (default), npy (float64 columns, for long runs; numpy.load reads it) "
@@ -103,11 +104,11 @@ def build_parser() -> argparse.ArgumentParser:
     val.add_argument("--out", default="heyroll-validation", help="output directory (default: heyroll-validation)")
     val.add_argument("--collisions", default="20", help="collisions compared with the reference (default: 20)")
     eq = sub.add_parser("equilibria", help="relative equilibria of a body on its track, in a fixed or turning plane (centres, saddles)")
-    eq.add_argument("scene", help="scene file (TOML), any track type")
+    eq.add_argument("scene", help="scene file (TOML): a circle, a curve y = f(x) or an arc chain")
     eq.add_argument("--json", action="store_true", help="print a JSON array of {x, type} sorted by x")
     eq.add_argument("--body", default="1", help="which body (1..N; default 1): equilibria depend on its radius")
     por = sub.add_parser("portrait", help="phase portrait, energy surface and bifurcation diagram of one body of a scene")
-    por.add_argument("scene", help="scene file (TOML), any track type")
+    por.add_argument("scene", help="scene file (TOML): a circle, a curve y = f(x) or an arc chain")
     por.add_argument("--out", default="heyroll-portrait", help="output directory (default: heyroll-portrait)")
     por.add_argument("--body", default="1", help="which body (1..N; default 1)")
     por.add_argument("--omega-max", dest="omega_max", help="bifurcation diagram from 0 to this Omega (rad/s)")
@@ -158,6 +159,13 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     _CREATED.clear()
     try:
+        return _command(args, argv)
+    finally:
+        _unlock()
+
+
+def _command(args, argv) -> int:
+    try:
         if args.command == "default-scene":
             sys.stdout.write(default_scene_text())
             return EXIT_OK
@@ -175,6 +183,7 @@ def main(argv: list[str] | None = None) -> int:
             return _billiard_orbits(args) if args.billiard_command == "orbits" else _billiard_portrait(args)
         return _run(args)
     except SceneError as exc:
+        _unlock()
         for created in _CREATED:  # nothing half-written: output directories made for nothing go, innermost first
             try:
                 created.rmdir()  # (only if empty)
@@ -341,6 +350,9 @@ def _out_dir(text: str) -> Path:
     return out
 
 
+#: The lock file a command holds in its --out directory while it writes there (see _lock).
+LOCK_NAME = ".heyroll.lock"
+
 #: Output directories this command created: removed again where bad input stops it before anything is written
 #: (an empty --out left behind by `billiard portrait --ball 5`: acceptance test).
 _CREATED: list = []
@@ -357,6 +369,40 @@ def _writable(out: Path) -> None:
     problem = writable_problem(out)
     if problem:
         raise BadInput("--out", problem)
+    _lock(out)
+
+
+#: The --out lock this command holds: (its file's path, the open file).
+_LOCKS: list = []
+
+
+def _lock(out: Path) -> None:
+    """Hold ``out`` for this command: a second command writing into it at the same time would remove the first's
+    outputs as it starts, and the first its (two runs into one --out ended with an empty directory: acceptance
+    test). An advisory lock (flock): the system lets it go when the process ends, however it ends."""
+    try:
+        import fcntl
+    except ImportError:  # (not POSIX: no lock)
+        return
+    path = out / LOCK_NAME
+    handle = open(path, "a")
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        handle.close()
+        raise BadInput("--out", f"another heyroll command is writing to {out}: let it finish or choose another "
+                                "directory") from None
+    _LOCKS.append((path, handle))
+
+
+def _unlock() -> None:
+    while _LOCKS:
+        path, handle = _LOCKS.pop()
+        try:
+            path.unlink()
+        except OSError:
+            pass
+        handle.close()
 
 
 def _path_scene(path: str, command: str) -> Scene:

@@ -70,7 +70,7 @@ class _TableFile:
 
     def write_passages(self, table: np.ndarray) -> None:
         """Junction passages and limiter impacts (``passage_table`` rows), appended to passages.csv."""
-        self._passages.write(csv_rows(table))
+        self._passages.write(csv_rows(table, self.precision.format))
         self.passage_rows += table.size
 
     def write(self, chunk, first_number: int) -> None:
@@ -263,13 +263,14 @@ def write_run(result: SimulationResult, out_dir: Path, *, scene_source: str, fig
         sink.write(chunk if result.collision_modes is None else chunk + (result.collision_modes, result.collision_spins),
                    1)
         if sink.passages_path:
-            sink.write_passages(result.passage_table())
+            sink.write_passages(result.passage_table(native=True))
         sink.close()
     files = {"collisions": Path(sink.path).name, "summary": "summary.json"}
     if getattr(sink, "passages_path", None):  # an open track: junction passages and limiter impacts
         files["passages"] = "passages.csv"
     elif result.scene.domain(0) is not None:  # a sink of the caller's that does not take them
-        atomic_write_text(out_dir / "passages.csv", collisions_csv(result.passage_table()))
+        atomic_write_text(out_dir / "passages.csv",
+                          collisions_csv(result.passage_table(native=True), result.precision.format))
         files["passages"] = "passages.csv"
     if result.scene.rough:  # every change of friction mode (see README, "Rough tracks")
         # (full digits of a quad or MPFR run's own numbers, as the collision table)

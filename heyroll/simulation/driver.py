@@ -146,10 +146,13 @@ class RunOptions:
                 tol = float(self.tolerance)
             except (TypeError, ValueError):
                 raise OptionsError("tolerance", f"must be a number, got {self.tolerance!r}") from None
-            if not math.isfinite(tol) or tol <= 0:
-                raise OptionsError("tolerance", f"must be a finite number > 0, got {self.tolerance!r}")
+            if not math.isfinite(tol) or not 0 < tol < 1:  # (as the CLI's --tolerance: acceptance test)
+                raise OptionsError("tolerance", f"must be a number > 0 and < 1, got {self.tolerance!r}")
         if isinstance(self.precision, str):
-            object.__setattr__(self, "precision", Precision.parse(self.precision))
+            try:
+                object.__setattr__(self, "precision", Precision.parse(self.precision))
+            except ValueError as exc:  # one error class for every option (a SceneError before: acceptance test)
+                raise OptionsError("precision", getattr(exc, "rule", str(exc))) from None
         events = self.max_events
         if events is not ... and events is not None and (
                 isinstance(events, bool) or not isinstance(events, (int, np.integer)) or events < 1):
@@ -813,7 +816,8 @@ class _Stream:
         log = self.log
         if not log.passages or not hasattr(self.sink, "write_passages"):
             return
-        table = passage_table(log.passages, first_number=log.passages_flushed + 1)
+        table = passage_table(log.passages, first_number=log.passages_flushed + 1,
+                              native=getattr(getattr(self.sink, "precision", None), "name", "double") != "double")
         with signals_deferred():  # as for collisions: a chunk is written once
             self.sink.write_passages(table)
             if self.kept_passages is None:

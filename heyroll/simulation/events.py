@@ -419,7 +419,7 @@ def _stopper(log, reason, data):
 
 def _track_stopper(log, event, holder, system):
     what = {
-        "left_track": "would leave the track: its normal force N (on a circle m (rho phi'^2 + g cos phi)) reaches 0",
+        "left_track": "would leave the track: its normal force N reaches 0",
     }[event.kind]
 
     def stop(ta, d_sgn):

@@ -361,9 +361,10 @@ class SimulationResult:
     def warnings(self) -> list[str]:
         return list(self.settings.get("warnings", []))
 
-    def passage_table(self) -> np.ndarray:
-        """Junction passages and limiter impacts, columns PASSAGE_COLUMNS (bodies and pieces from 1)."""
-        return passage_table(self.passages)
+    def passage_table(self, native: bool = False) -> np.ndarray:
+        """Junction passages and limiter impacts, columns PASSAGE_COLUMNS (bodies and pieces from 1); float64, or
+        with ``native=True`` a long, quad or MPFR run's own numbers (object columns, for full digits in text)."""
+        return passage_table(self.passages, native=native and self.precision.name != "double")
 
     def sample(self, n_points: int = 2000):
         """(t, states) on a uniform grid over the run, from the dense output (run with dense=True)."""
@@ -498,14 +499,17 @@ class SimulationResult:
         return out
 
 
-def passage_table(passages, first_number: int = 1) -> np.ndarray:
+def passage_table(passages, first_number: int = 1, native: bool = False) -> np.ndarray:
     """Passage records -> structured array (columns PASSAGE_COLUMNS; kind 0 junction, 1/2 lower/upper limiter),
-    numbered from ``first_number``."""
-    dtype = [(c, np.int64 if c in ("n", "body", "kind", "piece_from", "piece_to") else np.float64)
+    numbered from ``first_number``; ``native``: t, q and the rates as recorded (a long, quad or MPFR run's own
+    numbers, object columns, for full digits in text: passages.csv had 17 digits of a quad run, review)."""
+    number = object if native else np.float64
+    dtype = [(c, np.int64 if c in ("n", "body", "kind", "piece_from", "piece_to") else number)
              for c in PASSAGE_COLUMNS]
     table = np.zeros(len(passages), dtype=dtype)
+    value = (lambda x: x) if native else float
     for n, (t, body, kind, p_from, p_to, q, v, v_new) in enumerate(passages):
-        table[n] = (first_number + n, float(t), body + 1, kind, p_from + 1, p_to + 1, float(q), float(v), float(v_new))
+        table[n] = (first_number + n, value(t), body + 1, kind, p_from + 1, p_to + 1, value(q), value(v), value(v_new))
     return table
 
 

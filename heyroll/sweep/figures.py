@@ -188,7 +188,8 @@ def _scalars_1d(ds, key: str, path: Path, title: str, names: list) -> Path:
             error = np.asarray(ds["lyapunov_error"].values, dtype=float)[order]
             ax.errorbar(ds[key].values[order], y, yerr=error, fmt="none", ecolor="0.5", lw=0.6, capsize=2)
             ax.axhline(0, color="0.6", lw=0.5)
-        ax.set_ylabel(label)
+        # (wrapped: a panel is ~2 inches high, and "period p of the impact sequence" ran into the one above)
+        ax.set_ylabel("\n".join(textwrap.wrap(label, 22)), fontsize=9)
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel(_label(ds, key))
     _title(axes[0, 0], title)
