@@ -998,3 +998,47 @@ def test_a_rigid_cluster_on_a_rough_circle_slips_where_the_contact_force_makes_a
     need = (2 - 1) * rho * abs(acc)
     assert need == pytest.approx(0.3 * (rho * rate**2 + g * math.cos(phi[0])), rel=1e-12)
     assert (1.5 - 1) * rho * abs(acc) < 0.3 * (rho * rate**2 + g * math.cos(phi[1]))  # the disk holds
+
+
+def test_a_stuck_cluster_counts_its_slipping_members_friction_and_releases_when_it_rolls_again():
+    """Review: a particle (front), a ring with backspin and a disk slide down y = 0.3 x (mu = mu_s = 0.4). Sliding,
+    the cluster decelerates at a = (-2.5 g sin + 0.8 g cos) / 2.75 (the particle's and the ring's kinetic friction,
+    the ring with its translational mass) and stops at t = 0.2 sigma / a. There its load is 0.75 m g cos along the
+    slope less the ring's kinetic friction 0.4 m g cos: 0.35 < mu_s = 0.4, it sticks (the ring's friction left out
+    of the load, it had turned uphill against its mode). The ring spins down at mu g cos; rolling, its friction is
+    gone from the load, 0.75 > 0.4: the cluster slides at once (it had stayed stuck). Every joule is friction work."""
+    particle = Body.of_shape("particle", 0, mass=1)
+    ring, disk = Body.of_shape("ring", "0.05", mass=1), Body.of_shape("disk", "0.05", mass="0.5")
+    sigma = math.sqrt(1.09)
+    scene = Scene.make(CurveTrack.make("0.3*x", "-3", "3"), [particle, ring, disk], ["0", "1e-30", repr(0.1 / sigma)],
+                       ["-0.2"] * 3, law=make_law("newton", 0), friction="0.4", static_friction="0.4",
+                       slip=[0, "-6", 0], track_sides="one", g=G, run=RunSettings.make("2.5"))
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED, result.message
+    g_cos, g_sin = 9.81 / sigma, 9.81 * 0.3 / sigma
+    a = (-2.5 * g_sin + 0.8 * g_cos) / 2.75
+    t_stop = 0.2 * sigma / a
+    t_spun = t_stop + (6 - (a + 0.4 * g_cos) * t_stop) / (0.4 * g_cos)
+    rows = [tr[:4] for tr in result.transitions]
+    assert rows[:2] == [(pytest.approx(t_stop, abs=1e-12), 0, "sliding-", "stuck"),
+                        (pytest.approx(t_stop, abs=1e-12), 2, "rolling", "stuck")]
+    assert (pytest.approx(t_spun, abs=1e-9), 0, "stuck", "sliding-") in rows
+    assert result.final_modes == ("sliding-", "rolling", "rolling")
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work), rel=1e-12)
+
+
+def test_the_table_counts_a_stuck_clusters_rolling_member_as_rolling():
+    """Review: a disk hits a stuck particle + ring cluster; the table's energy_after counted the ring (mode 'stuck')
+    as slipping with no spin: 0.116 J short, exactly 1/2 (kappa - 1) m v^2 of the ring after the impact."""
+    particle, ring, disk = (Body.of_shape("particle", 0, mass=1), Body.of_shape("ring", "0.05", mass=1),
+                            Body.of_shape("disk", "0.05", mass=1))
+    scene = Scene.make(CurveTrack.make("0.2*x", "-3", "3"), [particle, ring, disk], ["0", "1e-30", "0.5"], [0, 0, "-1"],
+                       law=make_law("newton", 0), friction="0.5", static_friction="0.5", g=G, run=RunSettings.make("0.6"))
+    result = simulate(scene)
+    table = result.collision_table()
+    sigma2 = 1.04
+    kinetic = [sum(0.5 * kappa * sigma2 * float(s[3 + i]) ** 2 for i, kappa in enumerate((1, 2, 1.5)))
+               for s in (result.states_before[0], result.states_after[0])]
+    assert table["energy_before"][0] - table["energy_after"][0] == pytest.approx(kinetic[0] - kinetic[1], rel=1e-13)
+    impacts = float((table["energy_before"] - table["energy_after"]).sum())
+    assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work) + impacts, rel=1e-12)

@@ -184,6 +184,7 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
                        terms[first].sigma, terms[first].normal])
         if not own:
             continue
+        cluster_block, slip_forces = len(blocks) - 1, []
         for k in members:
             body = scene.bodies[k]
             if slides(body):
@@ -199,10 +200,15 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
             w = next(slips)
             slip_eqs.append((w, None))
             work.append((1 - rolling) * s_k * par(mu * body.mass) * n_mag * w)
+            # slipping, its kinetic friction -s mu m N acts on the cluster: part of the load static friction holds
+            # when the cluster is at rest (review: left out, a stuck cluster turned uphill against its mode)
+            slip_forces.append((1 - rolling) * (-s_k) * par(mu * body.mass) * n_mag * t_roll.sigma)
             within.append((len(blocks), k, w, rolling, s_k, n_mag, t_roll, t_slide))
             blocks.append(FrictionBlock(unit=u, members=(k,), rate=-1, rolls=True, stuck=stuck_i, sign=sign_k,
                                         rolling=rolling_k, side=-1, slip=-1, within=True))
             values.append([None, par(mu_s) * n_mag, t_roll.sigma, t_roll.normal])
+        if slip_forces:
+            values[cluster_block][0] = hy.sum([values[cluster_block][0]] + slip_forces)
     return blocks, body_acc, slip_eqs, unit_sums, values, work, within
 
 

@@ -253,6 +253,11 @@ class FrictionModes:
             self.apply(ta, block, new)
             self._note(t, s, block, new)
             self.log.friction_transitions += 1
+            if block.within:
+                # a member's mode changes its cluster's load at once (its kinetic friction comes or goes), with no
+                # root for the cluster's release events: judged now (review: a stuck cluster whose slipping ring
+                # rolled again stayed stuck with a load of 0.75 against a capacity of 0.4)
+                self._slip_where_not_held(ta, s, t, block.members[0])
             if kind not in ("turn", "reroll"):
                 self._onsets_at(ta, s, t, b)
             self.settle(ta, s, t)  # units turning at the same instant (bodies moving together)
@@ -362,7 +367,7 @@ class FrictionModes:
         values = None
         for b, block in enumerate(self.system.friction_blocks):
             k = block.members[0]
-            if not block.rolls or was[k] == "rolling":
+            if not block.rolls or was[k] in ("rolling", "stuck"):  # (stuck: a rolling member of a stuck cluster)
                 continue
             if values is None:
                 values = self._evaluate(np.asarray(before), t)
