@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 VALIDATION = Path(__file__).resolve().parents[1] / "validation"
 
 
@@ -30,10 +32,11 @@ def table_rows(text: str) -> list[list[str]]:
     return rows
 
 
+@pytest.mark.slow  # 40 s of CPU (46-100 s of wall in CI and on a loaded machine): the suite's largest test
 def test_billiards_study_tiny(tmp_path):
     report = tmp_path / "billiards.md"
     done = subprocess.run([sys.executable, str(VALIDATION / "billiards.py"), "--tiny", "--output", str(report)],
-                          capture_output=True, text=True, timeout=120)
+                          capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     # heyoka logs its warnings to stdout (the long-step probe provokes one): not part of the report
     out = "\n".join(line for line in done.stdout.splitlines() if "[heyoka-" not in line)
