@@ -611,8 +611,8 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
                                 else acc + par(1 / total) * forces[0]
                         members = [m for m in within if m[1] in unit.members]
                         if members:
-                            acc, rolling_accs = _slipping_members_motion(scene, members, acc, total, G, par)
-                            member_slips[u] = {m[1]: _member_slip(scene, m, G, par) for m in members}
+                            acc, rolling_accs, slips = _slipping_members_motion(scene, members, acc, total, G, par)
+                            member_slips[u] = {m[1]: slip for m, slip in zip(members, slips)}
                             for member, rolling_acc in zip(members, rolling_accs):
                                 b, k = member[0], member[1]
                                 slip_eq, need_now, need_rolling = member_slip_terms(
@@ -1009,18 +1009,20 @@ def _slipping_members_motion(scene, members, acc, total, G, par):
     (sum G_eff) psi'' = sum Q_k + the particles' friction + each slipping member's -s mu m N rho: a slipping
     member's generalized force from gravity, the frame and forcing is the same as rolling (G_k a_k: forces
     on the centre), its inertia m rho^2 = G_k / kappa_k, and the friction on its centre adds to the sum.
-    ``acc``: psi'' with every member rolling, (sum Q_k + friction) / sum G_k (mpf ``total``)."""
+    ``acc``: psi'' with every member rolling, (sum Q_k + friction) / sum G_k (mpf ``total``). Returns (psi'',
+    per member the psi'' were it rolling, per member :func:`_member_slip`)."""
     generalized = par(total) * acc
     mass = par(total)
-    pieces = []
+    pieces, slips = [], []
     for member in members:
         rolling, slip_friction, lost = _member_slip(scene, member, G, par)
+        slips.append((rolling, slip_friction, lost))
         pieces.append(((1 - rolling) * slip_friction, (1 - rolling) * lost))
     slipping_force = hy.sum([p[0] for p in pieces]) if len(pieces) > 1 else pieces[0][0]
     slipping_mass = hy.sum([p[1] for p in pieces]) if len(pieces) > 1 else pieces[0][1]
     out = (generalized + slipping_force) / (mass - slipping_mass)
     as_rolling = [(generalized + slipping_force - force) / (mass - slipping_mass + lost) for force, lost in pieces]
-    return out, as_rolling
+    return out, as_rolling, slips
 
 
 def _member_slip(scene, member, G, par):

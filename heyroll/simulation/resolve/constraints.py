@@ -70,12 +70,7 @@ def project_onto_contacts(system, state: list, pars, friction=None) -> list:
         rates = [gi * s[n + i] + gj * s[n + j] for (gi, gj), (i, j) in zip(grads, zip(members, members[1:]))]
         impulses = _tridiagonal(grads, M, [-r for r in rates], inverse=False)
         for p, k in enumerate(members):
-            push = 0
-            if p > 0:
-                push = push + impulses[p - 1] * grads[p - 1][1]
-            if p < len(grads):
-                push = push + impulses[p] * grads[p][0]
-            jump = push / M[p]
+            jump = _push(impulses, grads, p) / M[p]
             s[n + k] = s[n + k] + jump
             if k in slipping:
                 friction.slips[k] = friction.slips[k] + bodies[BODY_VALUES * k + 3] * jump
@@ -135,13 +130,7 @@ def cluster_impact(system, s, pars, contact, grad, closing, restitution, slippin
         return None
     out = {}
     for p in range(len(impulses) + 1):
-        k = chain[first + p]
-        push = 0
-        if p > 0:
-            push = push + impulses[p - 1] * grads[first + p - 1][1]
-        if p < len(impulses):
-            push = push + impulses[p] * grads[first + p][0]
-        out[k] = s[n + k] + push * inverse[first + p]
+        out[chain[first + p]] = s[n + chain[first + p]] + _push(impulses, grads[first:], p) * inverse[first + p]
     return out
 
 
@@ -191,14 +180,19 @@ def stop_impact(system, s, pars, k, upper: bool, restitution, slipping=()):
     out = {}
     offset = 0 if upper else 1  # the members' places in the chain
     for p, m in enumerate(members):
-        c = p + offset
-        push = 0
-        if c > 0:
-            push = push + impulses[c - 1] * chain_grads[c - 1][1]
-        if c < len(impulses):
-            push = push + impulses[c] * chain_grads[c][0]
-        out[m] = s[n + m] + push * weights[c]
+        out[m] = s[n + m] + _push(impulses, chain_grads, p + offset) * weights[p + offset]
     return out
+
+
+def _push(impulses, grads, p):
+    """The generalized impulse on the p-th body of a chain of contacts: P_{p-1} dg_{p-1}/dq_p + P_p dg_p/dq_p
+    (contact l joins bodies l and l + 1; ``grads[l]`` = (dg_l/dq_l, dg_l/dq_l+1))."""
+    push = 0
+    if p > 0:
+        push = push + impulses[p - 1] * grads[p - 1][1]
+    if p < len(impulses):
+        push = push + impulses[p] * grads[p][0]
+    return push
 
 
 def _tridiagonal(grads, M, rhs, *, inverse=True) -> list:
