@@ -96,6 +96,9 @@ def horizon_figure(horizon, path) -> Path:
     shown = np.where(rel > 0, rel, floor)
     fig = Figure(figsize=(8, 4.2), layout="constrained")
     ax = fig.add_subplot(1, 1, 1)
+    # (the range set first: one collision alone, or all at one value, gave matplotlib a range of zero height)
+    values = np.concatenate([shown, [horizon.threshold, 2.0**-52]])
+    ax.set_ylim(values.min() / 3, values.max() * 3)
     ax.semilogy(n, shown, ".-", ms=3, lw=0.7, color="C0", label="|t_double - t_quad| / t_quad")
     if not np.all(horizon.same_pair):
         bad = ~np.asarray(horizon.same_pair)
