@@ -473,7 +473,8 @@ def test_a_second_command_writing_into_the_same_out_is_refused_and_leaves_the_fi
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
-    assert (out / "collisions.csv").exists() and not (out / ".heyroll.lock").exists()
+    assert (out / "collisions.csv").exists()
+    assert main(["run", "--out", str(out), "--max-collisions", "3", "--no-figures", "--progress", "off"]) == 0
 
 
 @pytest.mark.parametrize("options, field", [({"tolerance": 2.0}, "tolerance"), ({"tolerance": 0.0}, "tolerance"),
@@ -488,3 +489,23 @@ def test_the_api_refuses_bad_run_options_as_the_cli_does_with_one_error_class(op
     with pytest.raises(OptionsError) as caught:
         heyroll.RunOptions(**options)
     assert caught.value.field == field and isinstance(caught.value, ValueError)
+
+
+def test_a_sweep_into_a_directory_a_run_is_writing_is_refused(tmp_path, capsys):
+    """Review: `heyroll sweep --out D` took no lock (a run and a sweep, or two sweeps, into one directory)."""
+    from heyroll.interfaces.outputs import hold_directory
+
+    out = tmp_path / "busy"
+    out.mkdir()
+    held = hold_directory(out)  # (another command's open file description: flock locks conflict across them)
+    try:
+        code = main(["sweep", "--vary", "collision.restitution=0.5:1:2", "--out", str(out), "--workers", "1",
+                     "--t-end", "1", "--no-figures", "--progress", "off"])
+        assert code == 2
+        assert capsys.readouterr().err.strip().endswith(f"--out: another heyroll command is writing to {out}: "
+                                                        "let it finish or choose another directory")
+        assert not (out / "sweep.zarr").exists()
+    finally:
+        held.close()
+    assert main(["sweep", "--vary", "collision.restitution=0.5:1:2", "--out", str(out), "--workers", "1",
+                 "--t-end", "1", "--no-figures", "--progress", "off"]) == 0

@@ -588,7 +588,6 @@ def test_colliding_while_slipping_never_creates_energy():
                        ["1.5499835417164392", "1.5499835417154391", "1.5499835417154391", "1.5499835417154391"],
                        law=make_law("hedrih", 0), friction="0.125", run=RunSettings.make(1, 60))
     result = simulate(scene)
-    # (it ends where a member of a cluster would slip: not modelled, status slip)
     assert result.status not in (Status.FAILED, Status.OVERLAP), result.message
     table = result.collision_table()
     assert (table["law_flag"] == 3).any()
@@ -1042,3 +1041,27 @@ def test_the_table_counts_a_stuck_clusters_rolling_member_as_rolling():
     assert table["energy_before"][0] - table["energy_after"][0] == pytest.approx(kinetic[0] - kinetic[1], rel=1e-13)
     impacts = float((table["energy_before"] - table["energy_after"]).sum())
     assert result.energy_initial - result.energy_final == pytest.approx(sum(result.friction_work) + impacts, rel=1e-12)
+
+
+def test_a_rolling_body_resting_on_a_stop_spins_down_and_keeps_its_energy_account():
+    """Review: a ring on y = x/2 (mu = mu_s = 0.05: it slips from the start) comes to rest on the plastic lower stop.
+    Its centre held, its spin runs down at u' = mu g cos / (kappa - 1) until it rolls (at rest) again; it had kept the
+    free body's slip equation, its slip grew to -9.6 m/s and the energy rose by 51 J. Every joule now: the friction
+    work plus the stop's 1/2 m v^2 (the impulse through the centre leaves the spin)."""
+    ring = Body.of_shape("ring", "0.05", mass=1)
+    scene = Scene.make(CurveTrack.make("0.5*x", "-1.5", "1.5"), [ring], ["-1.4"], ["0"], law=make_law("newton", 1),
+                       friction="0.05", static_friction="0.05", limiter_restitution="0", g=G, run=RunSettings.make(3))
+    result = simulate(scene)
+    assert result.status is Status.COMPLETED, result.message
+    stop = result.passage_table()[0]
+    sigma = math.sqrt(1.25)
+    v = sigma * stop["dq_before"]
+    rows = [tr[:4] for tr in result.transitions]
+    assert rows[-1][1:] == (0, "sliding+", "rolling") and result.final_modes == ("rolling",)
+    # sliding down from rest: v' = g sin - mu g cos, u' = mu g cos / (kappa - 1): at the stop w = v - u; then w -> -u ...
+    g_cos, g_sin = 9.81 / sigma * 1, 9.81 * 0.5 / sigma
+    u_stop = -0.05 * g_cos * stop["t"]  # (spinning down the slope)
+    assert v == pytest.approx(-(g_sin - 0.05 * g_cos) * stop["t"], rel=1e-12)
+    assert rows[-1][0] - stop["t"] == pytest.approx(-u_stop / (0.05 * g_cos), rel=1e-9)
+    lost = result.energy_initial - result.energy_final
+    assert lost == pytest.approx(sum(result.friction_work) + 0.5 * v * v, rel=1e-12)

@@ -350,9 +350,6 @@ def _out_dir(text: str) -> Path:
     return out
 
 
-#: The lock file a command holds in its --out directory while it writes there (see _lock).
-LOCK_NAME = ".heyroll.lock"
-
 #: Output directories this command created: removed again where bad input stops it before anything is written
 #: (an empty --out left behind by `billiard portrait --ball 5`: acceptance test).
 _CREATED: list = []
@@ -372,36 +369,26 @@ def _writable(out: Path) -> None:
     _lock(out)
 
 
-#: The --out lock this command holds: (its file's path, the open file).
+#: The --out locks this command holds (outputs.hold_directory): (directory, open lock file).
 _LOCKS: list = []
 
 
 def _lock(out: Path) -> None:
-    """Hold ``out`` for this command: a second command writing into it at the same time would remove the first's
-    outputs as it starts, and the first its (two runs into one --out ended with an empty directory: acceptance
-    test). An advisory lock (flock): the system lets it go when the process ends, however it ends."""
-    try:
-        import fcntl
-    except ImportError:  # (not POSIX: no lock)
+    """Hold ``out`` while this command writes there (outputs.hold_directory)."""
+    from .outputs import busy_message, hold_directory
+
+    if any(held == out for held, _ in _LOCKS):
         return
-    path = out / LOCK_NAME
-    handle = open(path, "a")
-    try:
-        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        handle.close()
-        raise BadInput("--out", f"another heyroll command is writing to {out}: let it finish or choose another "
-                                "directory") from None
-    _LOCKS.append((path, handle))
+    handle = hold_directory(out)
+    if handle is None:
+        raise BadInput("--out", busy_message(out))
+    _LOCKS.append((out, handle))
 
 
 def _unlock() -> None:
+    """Let the locks go."""
     while _LOCKS:
-        path, handle = _LOCKS.pop()
-        try:
-            path.unlink()
-        except OSError:
-            pass
+        _out, handle = _LOCKS.pop()
         handle.close()
 
 
@@ -653,6 +640,7 @@ def _sweep(args, argv: list) -> int:
     print(outcome.summary_line())
     print(f"wrote {outcome.path}")
     if not args.no_figures:
+        _lock(out)  # (the sweep held it while it wrote the store)
         _write_sweep_figures(outcome.path, out, None)
     return EXIT_OK
 

@@ -225,6 +225,41 @@ def writable_problem(out: Path) -> str | None:
     return None
 
 
+class HeldDirectory:
+    """An output directory this process holds (:func:`hold_directory`); ``close`` lets it go."""
+
+    def __init__(self, fd):
+        self.fd = fd
+
+    def close(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)  # (closing the descriptor releases its flock)
+            self.fd = None
+
+
+def hold_directory(out: Path) -> HeldDirectory | None:
+    """Lock the directory ``out`` for this process (an advisory flock on the directory itself: no lock file, so
+    nothing is left behind, and one inode for every command): the hold, or None where another command holds it.
+    A second command writing into the same directory at the same time removed the first's outputs as it
+    started, and the first its (two runs into one --out ended with an empty directory: acceptance test). The
+    system lets it go when the process ends, however it ends. Where the platform has no flock: no lock."""
+    try:
+        import fcntl
+    except ImportError:
+        return HeldDirectory(None)
+    fd = os.open(out, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        return None
+    return HeldDirectory(fd)
+
+
+def busy_message(out: Path) -> str:
+    return f"another heyroll command is writing to {out}: let it finish or choose another directory"
+
+
 def prepare_run_directory(out_dir: Path) -> None:
     """Make ``out_dir`` ready for a run: created, and without an earlier run's outputs.
 

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..model.laws import GeneralizedNewtonLaw, ImpulseMap, impulse_map
 from ..model._numbers import DEKKER_SPLIT, TOUCHING_SLACK, halves, workprec
-from .resolve.friction import slipping, slipping_law
+from .resolve.friction import slipping, slipping_law, slipping_members
 from .compiled_cache import by_constants
 from .system import SceneSystem, overlap_tolerance, unit_acceleration, unit_jerk
 
@@ -1152,7 +1152,7 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
                 va_new, vb_new = _slipping_map(scene, system, pair.i, pair.j, holder).apply(va, vb)
                 flag = 3
             else:  # slipping bodies (free or in a cluster): their translational mass in Newton's law between units
-                slips = tuple((k, scene.bodies[k].kappa) for k in members if slipping(holder, k, scene))
+                slips = slipping_members(holder, members, scene)
                 va_new, vb_new = working_map(unit_map(system, a, b, scene.law.restitution, slips),
                                              system.precision).apply(va, vb)
         else:

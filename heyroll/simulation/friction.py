@@ -151,7 +151,13 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
             sliding_acc = t_slide.acceleration - sign * par(mu) * n_mag / t_slide.sigma
             body_acc[k] = rolling * t_roll.acceleration + (1 - rolling) * sliding_acc
             w = next(slips)
-            slip_eqs.append((w, (1 - rolling) * (t_slide.driving - sign * par(mu * boost) * n_mag)))
+            if unit.pinned:
+                # resting on a stop, its centre held (q' = 0): at rest it needs no friction, and slipping its spin
+                # runs down, w' = -u' = -s mu N / (kappa - 1) (review: the free body's w' made its slip grow, +51 J)
+                need = par(0)
+                slip_eqs.append((w, (1 - rolling) * (-sign * par(mu / (body.kappa - 1)) * n_mag)))
+            else:
+                slip_eqs.append((w, (1 - rolling) * (t_slide.driving - sign * par(mu * boost) * n_mag)))
             # The power friction takes: mu m N |w| while slipping (s w = |w|).
             work.append((1 - rolling) * sign * par(mu * body.mass) * n_mag * w)
             blocks.append(FrictionBlock(unit=u, members=members, rate=-1, rolls=True, stuck=stuck_i, sign=sign_i,

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..interfaces.outputs import writable_problem
+from ..interfaces.outputs import busy_message, hold_directory, writable_problem
 from ..simulation.driver import signal_handled, signals_deferred
 from .errors import SchedulerError, SweepError
 from .plan import SweepPlan, make_plan
@@ -149,10 +149,11 @@ def execute(plan: SweepPlan, out: Path, *, workers=None, scheduler=None, client=
         "precision": plan.precision,
         "batch": plan.batch,
     }
-    with _executor(len(pending), workers, scheduler, client) as (submit, dashboard):
+    with _executor(len(pending), workers, scheduler, client) as (submit, dashboard), contextlib.ExitStack() as stack:
         if dashboard and report is not None:
             report(f"dask dashboard: {dashboard}")
-        _writable(out)  # after the scheduler answered: an unreachable one leaves nothing behind
+        held = _writable(out)  # after the scheduler answered: an unreachable one leaves nothing behind
+        stack.callback(held.close)
         path = open_or_create(plan, out, attrs)
         writer = ChunkWriter(path)
         with _progress_bar(progress, plan.n_points, before) as bar:
@@ -243,7 +244,12 @@ def _progress_bar(mode, total: int, initial: int):
         yield bar
 
 
-def _writable(out: Path) -> None:
+def _writable(out: Path):
+    """Create ``out``, check it can be written and hold it (outputs.hold_directory): the open lock file."""
     problem = writable_problem(out)
     if problem:
         raise SweepError("--out", problem)
+    handle = hold_directory(out)
+    if handle is None:
+        raise SweepError("--out", busy_message(out))
+    return handle

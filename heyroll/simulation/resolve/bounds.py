@@ -27,7 +27,7 @@ from ..contact_function import BODY_VALUES, evaluate
 from ..events import OPEN_ULPS, below_resolution
 from ..system import piece_bounds
 from .constraints import stop_impact
-from .friction import slipping
+from .friction import slipping_members
 
 #: Passage kinds, in the passages table.
 PASSAGE_KINDS = ("junction", "limiter_lower", "limiter_upper")
@@ -58,12 +58,6 @@ def left_track_message(scene, values, k: int, q, dq, t) -> str | None:
     c = scene.coordinate
     return (f"body {k + 1} cannot stay on the one-sided track: its normal force N < 0 at {c} = {float(q):.17g}, "
             f"d{c} = {float(dq):.17g}, t = {float(t):.17g} s")
-
-
-def _slipping_members(holder, system, k, scene) -> tuple:
-    """(body, kappa) of the rolling members of body k's unit that slip (rough tracks)."""
-    unit = system.units[system.unit_of[k]]
-    return tuple((m, scene.bodies[m].kappa) for m in unit.members if slipping(holder, m, scene))
 
 
 def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, function, settle=None):
@@ -123,7 +117,8 @@ def make_bound_callback(scene, system, event, log, holder, pieces, time_scale, f
             kept[:] = pars[: len(kept)]
             return log.record_passage((t, k, 0, piece, new, q, v, v)) and after_junction(ta, s, pars, t)
         v_new = -k_lim * v
-        rigid = stop_impact(system, s, pars, k, upper, k_lim, _slipping_members(holder, system, k, scene)) \
+        rigid = stop_impact(system, s, pars, k, upper, k_lim,
+                            slipping_members(holder, system.units[system.unit_of[k]].members, scene)) \
             if in_cluster and system.per_body else None
         if rigid is not None:  # the cluster rebounds as one (each member's rate from the links)
             for m, rate in rigid.items():  # (all moved off the stop alike: the links stay closed)

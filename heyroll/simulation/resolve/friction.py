@@ -487,6 +487,12 @@ def slipping(holder, body: int, scene) -> bool:
     return modes is not None and scene.bodies[body].kappa != 1 and modes.state.modes[body] in SLIDING
 
 
+def slipping_members(holder, bodies, scene) -> tuple:
+    """(body, kappa) of the rolling bodies among ``bodies`` that slip now: an impulse moves them with their
+    translational mass m (resolve.constraints, events.unit_map)."""
+    return tuple((k, scene.bodies[k].kappa) for k in bodies if slipping(holder, k, scene))
+
+
 @by_constants()
 def slipping_law(scene, i: int, j: int, slip_i: bool, slip_j: bool):
     """The law of a collision where a rolling body slips: Newton's law on the rates with the
@@ -519,4 +525,4 @@ def initial_modes(scene) -> list[str]:
     return out
 
 
-__all__ = ["FrictionModes", "FrictionState", "MODES", "friction_function", "initial_modes"]
+__all__ = ["FrictionModes", "FrictionState", "MODES", "friction_function", "initial_modes", "slipping_members"]

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...model._numbers import touching_slack, workprec
-from .friction import slipping, slipping_law
+from .friction import slipping, slipping_law, slipping_members
 from ..contact_function import CONTACT_VALUES, evaluate
 from .constraints import cluster_impact
 from ..events import (
@@ -103,9 +103,8 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         seen[:] = (float(acc), gi, gj, float(si), float(sj), float(vi), float(vj))
         if held is not None:
             # A cluster or a unit on a stop takes part: rigid through the impact if its contacts push.
-            slips = tuple((k, scene.bodies[k].kappa)  # (every member that slips, in either unit)
-                          for k in system.units[contact.unit_a].members + system.units[contact.unit_b].members
-                          if rough and slipping(holder, k, scene))
+            slips = slipping_members(holder, system.units[contact.unit_a].members  # (in either unit)
+                                     + system.units[contact.unit_b].members, scene) if rough else ()
             rates = cluster_impact(system, s, pars, contact, (gi, gj), gi * vi + gj * vj, law_k, slips)
             if rates is not None:
                 before = s.tolist()
