@@ -21,11 +21,13 @@ that touch at the same instant to the scene's simultaneity policy:
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from itertools import combinations
 
 from ...model.table import TableScene
 from ...model.table.laws import after_impact, with_normal
-from ...model.laws import GeneralizedNewtonLaw, impulse_map
+from ...model.laws import GeneralizedNewtonLaw
+from ...model.table.laws.base import NormalImpulseLaw, RestitutionLaw
 from ...model.table.laws.ball_ball.newton import NewtonTableLaw
 from ..precision import Precision
 from .contacts import Contact
@@ -41,6 +43,15 @@ SCENE_LAW, FALLBACK_LAW, SIMULTANEOUS, SLIDING_BALL, SETTLED = 0, 1, 2, 3, 4
 MAX_SIMULTANEOUS = 8
 #: Sweeps of projected Gauss-Seidel at most.
 GAUSS_SEIDEL_SWEEPS = 100_000
+
+
+@dataclass(frozen=True)
+class _RollingMassesNewton(NormalImpulseLaw, RestitutionLaw):
+    """Newton's law on the normal rates with the rolling masses kappa m: the fallback where Hedrih's law would
+    leave balls of unequal radii approaching (Resolver.pair); at k = 1 it keeps the rolling energy."""
+
+    def one_dimensional(self):
+        return GeneralizedNewtonLaw(restitution=self.restitution)
 
 
 class Resolver:
@@ -60,7 +71,7 @@ class Resolver:
         #: the masses m it had made +43 % in one impact of a sphere on a ring, review)
         self.pair_constants, self.fallback, self.rolling_fallback = {}, {}, {}
         self.newton = newton = NewtonTableLaw(restitution=scene.law.restitution)
-        generalized = GeneralizedNewtonLaw(restitution=scene.law.restitution)
+        generalized = _RollingMassesNewton(restitution=scene.law.restitution)
         for i in range(n):
             for j in range(i + 1, n):
                 bi, bj = scene.balls[i].body, scene.balls[j].body
@@ -69,8 +80,7 @@ class Resolver:
                 else:
                     self.pair_constants[(i, j)] = scene.law.constants(bi, bj, num)
                 self.fallback[(i, j)] = newton.constants(bi, bj, num)
-                rolling = impulse_map(generalized, bi, bj, 1, 1)
-                self.rolling_fallback[(i, j)] = (num(rolling.q), num(rolling.a_i), num(rolling.a_j))
+                self.rolling_fallback[(i, j)] = generalized.constants(bi, bj, num)
         self.k_cushion = num(scene.cushion.restitution)
         self.k_law = num(scene.law.restitution)
         one_d = getattr(scene.law, "one_dimensional", None)
