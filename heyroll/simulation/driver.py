@@ -613,9 +613,8 @@ def _record_merge(scene, log, stream, friction, t, pair, before, after, slips) -
     log.records.append((t[0] + t[1], pair, list(before), None, list(after), 2))
     if friction is not None:  # its rows' modes, and the spins of slipping bodies (the impulse leaves them)
         spins = [float("nan")] * n
-        for k, mode in enumerate(friction.modes):
-            if mode in ("sliding+", "sliding-") and scene.bodies[k].kappa != 1:
-                spins[k] = float(scene.sigma(k, float(before[k]))) * float(before[n + k]) - float(slips[k])
+        for k in friction.slipping():
+            spins[k] = float(scene.sigma(k, float(before[k]))) * float(before[n + k]) - float(slips[k])
         fill_record_modes(log, friction.modes, stream.pair_bodies, spins=spins)
     if len(log.records) >= log.chunk_size and log.on_full is not None:
         log.on_full()
@@ -633,9 +632,8 @@ def _merge(scene, system, units, contact, full_state, friction=None):
     a, b = contact.unit_a, contact.unit_b
     nb = len(scene.bodies)
     members = units[a].members + units[b].members
-    slipping = {k for k in members if friction is not None and scene.bodies[k].kappa != 1
-                and friction.modes[k] in ("sliding+", "sliding-")}
-    G = [g / float(scene.bodies[k].kappa) if k in slipping else g for k, g in enumerate(system.gen_mass)]
+    slipping = friction.slipping() if friction is not None else {}
+    G = [g / float(slipping[k]) if k in slipping else g for k, g in enumerate(system.gen_mass)]
     momentum = sum(G[k] * full_state[nb + k] for k in members)
     rate = momentum / sum(G[k] for k in members)
     merged = cluster_unit(scene, members)

@@ -80,6 +80,23 @@ class FrictionBlock:
 
 
 @dataclass(frozen=True)
+class MemberSlip:
+    """A rolling member of a cluster with a friction block of its own (build_friction's ``within``): its
+    block's index, the body, its slip variable, its rolling and sign parameters (expressions), N per unit
+    mass, its rolling terms, and ``friction``, the generalized force -s mu m N sigma its kinetic friction
+    exerts while it slips."""
+
+    block: int
+    body: int
+    slip: object
+    rolling: object
+    sign: object
+    normal: object
+    terms: object
+    friction: object
+
+
+@dataclass(frozen=True)
 class FrictionEvent:
     """A friction event of block ``block``: turn, release+, release-, slip+, slip-, reroll, normal."""
 
@@ -118,9 +135,8 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
 
     Each rolling member of a cluster has a block of its own (``within``): it rolls or slips inside its
     cluster. Its slip equation, its load and its inertia in the cluster's motion depend on the contact
-    forces, which the system solves after: ``within`` lists, per such block, (block, body, slip variable,
-    rolling and sign parameters, N, rolling terms, sliding terms); its slip equation and load are None
-    here (:func:`member_slip_terms`).
+    forces, which the system solves after: ``within`` lists them (:class:`MemberSlip`); their slip
+    equations and loads are None here (:func:`member_slip_terms`).
     """
     mu = scene.track_friction
     mu_s = scene.static_coefficient
@@ -208,8 +224,10 @@ def build_friction(scene, units, per_body, terms, slide_terms, q_of, v_of, par, 
             work.append((1 - rolling) * s_k * par(mu * body.mass) * n_mag * w)
             # slipping, its kinetic friction -s mu m N acts on the cluster: part of the load static friction holds
             # when the cluster is at rest (review: left out, a stuck cluster turned uphill against its mode)
-            slip_forces.append((1 - rolling) * (-s_k) * par(mu * body.mass) * n_mag * t_roll.sigma)
-            within.append((len(blocks), k, w, rolling, s_k, n_mag, t_roll, t_slide))
+            member = MemberSlip(block=len(blocks), body=k, slip=w, rolling=rolling, sign=s_k, normal=n_mag,
+                                terms=t_roll, friction=-s_k * par(mu * body.mass) * n_mag * t_roll.sigma)
+            slip_forces.append((1 - rolling) * member.friction)
+            within.append(member)
             blocks.append(FrictionBlock(unit=u, members=(k,), rate=-1, rolls=True, stuck=stuck_i, sign=sign_k,
                                         rolling=rolling_k, side=-1, slip=-1, within=True))
             values.append([None, par(mu_s) * n_mag, t_roll.sigma, t_roll.normal])
@@ -222,15 +240,15 @@ def member_slip_terms(scene, member, acceleration, rolling_acceleration, q, v, p
     """A rolling member's slip equation, the friction its rolling needs now (for its slip events) and
     the friction it would need rolling (for the callbacks' decisions), from its cluster's contact forces.
 
-    ``member``: an entry of build_friction's ``within``; ``acceleration``: its q'' with the contact forces
+    ``member``: a :class:`MemberSlip`; ``acceleration``: its q'' with the contact forces
     (the mode's); ``rolling_acceleration``: the same with this member rolling; ``q``, ``v``: the state
     variables its position and rate are. Rolling, kappa m v_C' = m T + F_c, so the friction is
     F = (1 - 1/kappa)(m T + F_c) = (kappa - 1) m v_C', v_C' = sigma q'' + sigma_q q'^2 its centre's tangential
     acceleration; slipping, the spin's u' = s mu N / (kappa - 1) and w' = v_C' - u'.
     """
-    _b, k, w, rolling, sign, n_mag, t_roll, _t_slide = member
-    kappa = scene.bodies[k].kappa
-    sigma = t_roll.sigma
+    w, rolling, sign, n_mag = member.slip, member.rolling, member.sign, member.normal
+    kappa = scene.bodies[member.body].kappa
+    sigma = member.terms.sigma
     spread = hy.diff(sigma, q) * v * v
     with workprec():
         spin = 1 / (kappa - 1)

@@ -559,7 +559,7 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
             # A rolling member of a cluster that slips takes part in the contacts with its translational
             # inertia m (kappa_eff = 1), rolling with kappa m (friction.build_friction's own blocks)
             within = friction[6] if rough else []
-            inertia = {member[1]: 1 + member[3] * par(scene.bodies[member[1]].kappa - 1) for member in within}
+            inertia = {m.body: 1 + m.rolling * par(scene.bodies[m.body].kappa - 1) for m in within}
             accelerations, links, link_exprs, link_terms = _constrained_accelerations(
                 scene, units, terms, psi, dpsi, par, events, inertia)
             if rough:
@@ -569,12 +569,12 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
                             accelerations[k] = (1 - hy.par[block.stuck]) * accelerations[k]
                 slip_numbers = [b for b, block in enumerate(friction[0]) if block.rolls]  # slip_eqs' order
                 for member in within:
-                    b, k, _w, _rolling, _sign, _n, t_roll, _t = member
+                    b, k = member.block, member.body
                     # the friction its rolling would need: the contact forces solved with it rolling
                     as_rolling = dict(inertia)
                     as_rolling[k] = par(scene.bodies[k].kappa)
                     rolling_terms = list(terms)
-                    rolling_terms[k] = dataclasses.replace(terms[k], acceleration=t_roll.acceleration)
+                    rolling_terms[k] = dataclasses.replace(terms[k], acceleration=member.terms.acceleration)
                     rolling_acc = _constrained_accelerations(
                         scene, units, rolling_terms, psi, dpsi, par, False, as_rolling)[0]
                     slip_eq, need_now, need_rolling = member_slip_terms(
@@ -609,12 +609,12 @@ def _build_system(scene: Scene, precision: Precision, watched, units: tuple, eve
                         if forces:
                             acc = acc + par(1 / total) * hy.sum(forces) if len(forces) > 1 \
                                 else acc + par(1 / total) * forces[0]
-                        members = [m for m in within if m[1] in unit.members]
+                        members = [m for m in within if m.body in unit.members]
                         if members:
                             acc, rolling_accs, slips = _slipping_members_motion(scene, members, acc, total, G, par)
-                            member_slips[u] = {m[1]: slip for m, slip in zip(members, slips)}
+                            member_slips[u] = {m.body: slip for m, slip in zip(members, slips)}
                             for member, rolling_acc in zip(members, rolling_accs):
-                                b, k = member[0], member[1]
+                                b = member.block
                                 slip_eq, need_now, need_rolling = member_slip_terms(
                                     scene, member, (1 - stuck) * acc, rolling_acc, psi[u], dpsi[u], par)
                                 friction[2][slip_numbers.index(b)] = slip_eq
@@ -898,6 +898,7 @@ def _constrained_accelerations(scene, units, terms, q, v, par, events, inertia=N
     links, lambdas, link_terms = [], [], []
     length = max(float(hi - lo) for lo, hi in (track.domain(b) for b in scene.bodies))
     alpha = par(math.sqrt(float(scene.g) / max(length, 1e-300)))
+    inertia = inertia or {}
     for u, unit in enumerate(units):
         if unit.pinned:
             for k in unit.members:
@@ -906,7 +907,6 @@ def _constrained_accelerations(scene, units, terms, q, v, par, events, inertia=N
         if not unit.is_cluster:
             continue
         members = unit.members
-        inertia = inertia or {}
         M = [(par(scene.bodies[k].mass) * inertia[k] if k in inertia else par(scene.bodies[k].kappa * scene.bodies[k].mass))
              * terms[k].sigma * terms[k].sigma for k in members]
         grads, rhs = [], []
@@ -1027,12 +1027,10 @@ def _slipping_members_motion(scene, members, acc, total, G, par):
 
 def _member_slip(scene, member, G, par):
     """(rolling parameter, -s mu m N rho its friction's generalized force, G (1 - 1/kappa) the inertia it
-    loses slipping) of a rolling member of a rigid cluster (friction.build_friction's ``within``)."""
-    _b, k, _w, rolling, sign, n_mag, t_roll, _t = member
-    body = scene.bodies[k]
+    loses slipping) of a rolling member of a rigid cluster (a friction.MemberSlip)."""
     with workprec():
-        lost = G[k] * (1 - 1 / body.kappa)
-    return rolling, -sign * par(scene.track_friction * body.mass) * n_mag * t_roll.sigma, par(lost)
+        lost = G[member.body] * (1 - 1 / scene.bodies[member.body].kappa)
+    return member.rolling, member.friction, par(lost)
 
 
 def _with_margin(height: float) -> float:

@@ -26,16 +26,6 @@ from ..system import link_bodies
 POSITION_PASSES = 3
 
 
-def _translational(friction) -> dict:
-    """Rolling bodies that slip, with their kappa (``friction``: the run's FrictionState, or None): they take
-    part in impulses with their translational mass m (the impulse through the centre leaves the spin)."""
-    if friction is None:
-        return {}
-    bodies = friction.scene.bodies
-    return {k: bodies[k].kappa for k, mode in enumerate(friction.modes)
-            if mode in ("sliding+", "sliding-") and bodies[k].kappa != 1}
-
-
 def project_onto_contacts(system, state: list, pars, friction=None) -> list:
     """The state with every cluster's contacts closed (g = 0, g' = 0) and pinned units at rest.
 
@@ -44,7 +34,7 @@ def project_onto_contacts(system, state: list, pars, friction=None) -> list:
     rate's jump (its spin u unchanged)."""
     s = list(state)
     n = system.n_bodies
-    slipping = _translational(friction)
+    slipping = friction.slipping() if friction is not None else {}
     for unit in system.units:
         if unit.pinned:
             for k in unit.members:

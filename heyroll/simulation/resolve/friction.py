@@ -70,6 +70,12 @@ class FrictionState:
         self.work = [0.0] * len(scene.bodies)
         self.num = precision.number
 
+    def slipping(self) -> dict:
+        """The rolling bodies that slip now, with their kappa: an impulse moves them with their translational
+        mass m, through their centres, their spins untouched."""
+        bodies = self.scene.bodies
+        return {k: bodies[k].kappa for k, mode in enumerate(self.modes) if mode in SLIDING and bodies[k].kappa != 1}
+
     def record(self, t, body, old, new, q, dq, work=0.0) -> None:
         if old != new:
             self.transitions.append((t, body, old, new, q, dq))  # (t, q, dq in the run's own type)
@@ -488,9 +494,11 @@ def slipping(holder, body: int, scene) -> bool:
 
 
 def slipping_members(holder, bodies, scene) -> tuple:
-    """(body, kappa) of the rolling bodies among ``bodies`` that slip now: an impulse moves them with their
-    translational mass m (resolve.constraints, events.unit_map)."""
-    return tuple((k, scene.bodies[k].kappa) for k in bodies if slipping(holder, k, scene))
+    """(body, kappa) of the rolling bodies among ``bodies`` that slip now (FrictionState.slipping): an impulse
+    moves them with their translational mass m (resolve.constraints, events.unit_map)."""
+    modes = holder[2] if len(holder) > 2 else None
+    slips = modes.state.slipping() if modes is not None else {}
+    return tuple((k, slips[k]) for k in bodies if k in slips)
 
 
 @by_constants()
