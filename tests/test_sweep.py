@@ -276,6 +276,50 @@ def test_an_unreachable_scheduler_is_one_line_exit_2(tmp_path, capsys, monkeypat
     assert not out.exists()
 
 
+@pytest.mark.parametrize("answer", [b"SSH-2.0-OpenSSH_9.6\r\nHTTP/1.1 400 Bad Request\r\n\r\n", None],
+                         ids=["a_banner", "silence"])
+def test_a_service_that_is_not_a_scheduler_is_one_line_exit_2(tmp_path, capsys, monkeypatch, answer):
+    """Review: a text banner made Dask fail with a MemoryError (a traceback, exit 1); a service that accepts
+    and says nothing (an HTTP server) held the sweep past Dask's timeout for minutes."""
+    import socket
+    import threading
+
+    monkeypatch.setattr(sweep_run, "SCHEDULER_TIMEOUT", 1)
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    server.settimeout(0.2)
+    accepted, stop = [], threading.Event()
+
+    def serve():
+        while not stop.is_set():
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                continue
+            accepted.append(conn)
+            if answer is not None:
+                conn.sendall(answer)
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    out = tmp_path / "out"
+    started = time.monotonic()
+    try:
+        code = main(["sweep", "--vary", "g=9:10:2", "--scheduler", f"tcp://127.0.0.1:{server.getsockname()[1]}",
+                     "--out", str(out)])
+    finally:
+        stop.set()
+        thread.join()
+        for conn in accepted:
+            conn.close()
+        server.close()
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert err.startswith("heyroll: error: --scheduler: cannot reach the dask scheduler")
+    assert time.monotonic() - started < 10 and accepted and not out.exists()
+
+
 def test_a_local_two_worker_cluster_gives_the_in_process_store(tmp_path, capsys):
     spec = dict(vary={"collision.restitution": (0.5, 1.0, 12)}, keep="impacts:3", t_end=T_END)
     alone = run_sweep(out=tmp_path / "alone", workers=1, **spec)

@@ -630,7 +630,10 @@ def _sweep(args, argv: list) -> int:
                               command=shlex.join(["heyroll", *argv]), report=print)
     except KeyboardInterrupt:
         path = store_path(out)
-        stored = int(stored_mask(path).sum()) if path.exists() else 0
+        if not path.exists():  # stopped before the store was made (connecting to a scheduler, review)
+            print("interrupted: no point stored yet; the same command starts the sweep")
+            return EXIT_INTERRUPTED
+        stored = int(stored_mask(path).sum())
         print(f"interrupted: {stored} of {plan.n_points} points stored in {path}; the same command continues")
         return EXIT_INTERRUPTED
     except OSError as exc:

@@ -225,12 +225,36 @@ def _executor(chunks: int, workers, scheduler, client):
 
 @contextlib.contextmanager
 def _connect(client_class, address: str):
-    try:
-        client = client_class(address, timeout=SCHEDULER_TIMEOUT)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise SchedulerError("--scheduler", f"cannot reach the dask scheduler at {address}: "
-                                            f"{str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__}") from None
-    with client:
+    """A client of the scheduler at ``address``, or SchedulerError within twice SCHEDULER_TIMEOUT.
+
+    Dask's own timeout covers the TCP connection, not its handshake: a service that accepts and stays
+    silent (an HTTP server) held the sweep for minutes, and one that answers with text (a banner) made
+    Dask read it as a frame length and fail with a MemoryError (review). So the client is made in a
+    daemon thread this one waits for, and any error of it is the scheduler's."""
+    import threading
+
+    made: dict = {}
+
+    def make():
+        try:
+            made["client"] = client_class(address, timeout=SCHEDULER_TIMEOUT)
+        except Exception as exc:  # noqa: BLE001 (whatever answered, it is not a scheduler we can use)
+            made["error"] = exc
+
+    thread = threading.Thread(target=make, name="heyroll-scheduler-connect", daemon=True)
+    thread.start()
+    thread.join(2 * SCHEDULER_TIMEOUT)
+    if thread.is_alive():
+        raise SchedulerError("--scheduler", f"cannot reach the dask scheduler at {address}: no answer within "
+                                            f"{2 * SCHEDULER_TIMEOUT} s (is a dask scheduler listening there?)")
+    if "error" in made:
+        exc = made["error"]
+        if isinstance(exc, (OSError, TimeoutError, ValueError)):
+            detail = str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__
+        else:
+            detail = f"what answers there is not a dask scheduler ({exc.__class__.__name__})"
+        raise SchedulerError("--scheduler", f"cannot reach the dask scheduler at {address}: {detail}")
+    with made["client"] as client:
         yield client
 
 
