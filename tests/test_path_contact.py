@@ -196,3 +196,36 @@ def test_plastic_collisions_on_a_curve_end_in_contact_not_in_endless_chatter():
     assert result.status.value == "completed", result.message
     assert result.n_collisions < 100
     assert ((1, 2, 3, 4),) in [m.clusters for m in result.mode_changes]
+
+
+def test_a_plastic_collision_that_the_law_separates_is_not_glued_on_a_path_track():
+    """Review: at k = 0 eqs. 8-11 give equal omega_P, so a ring (r = 0.1) struck by a disk (r = 0.05) runs
+    ahead at twice its centre speed. On an arc equal to the circle, and on the curve of that circle, a
+    plastic impulse (law_flag 2) glued them at once (0.062 J more lost) and their second collision never
+    came: the bounces had been judged by k times the closing, 0. The circle's run, and the review's own
+    integration of the arc (DOP853, rtol 1e-13: t = 1.2031489560086 s), separate them."""
+    law = "[collision]\nlaw = 'hedrih'\nrestitution = 0.0\n"
+    bodies = {
+        "circle": "[[bodies]]\nshape='disk'\nradius=0.05\nmass=1.0\nphi=-0.5\ndphi=2.0\n"
+                  "[[bodies]]\nshape='ring'\nradius=0.1\nmass=0.6\nphi=0.3\ndphi=0.0\n",
+        "arcs": "[[bodies]]\nshape='disk'\nradius=0.05\nmass=1.0\nsegment=1\nangle=-0.5\ndangle=2.0\n"
+                "[[bodies]]\nshape='ring'\nradius=0.1\nmass=0.6\nsegment=1\nangle=0.3\ndangle=0.0\n",
+        "curve": "[[bodies]]\nshape='disk'\nradius=0.05\nmass=1.0\nx=-0.479425538604203\ndx=1.755165123780746\n"
+                 "[[bodies]]\nshape='ring'\nradius=0.1\nmass=0.6\nx=0.29552020666134\ndx=0.0\n"}
+    tracks = {"circle": "[track]\ntype='circle'\nradius=1.0\n",
+              "arcs": "[track]\ntype='arcs'\nstart_x=0.0\nstart_y=0.0\n[[track.segments]]\nkind='arc'\n"
+                      "radius=1.0\nside='concave'\nstart=-3.0\nend=3.0\n",
+              "curve": "[track]\ntype='curve'\ny='1 - sqrt(1 - x**2)'\nx_min=-0.9\nx_max=0.9\n"}
+    runs = {kind: simulate(heyroll.parse_scene(tracks[kind] + bodies[kind] + law), heyroll.RunOptions(t_end=3.0))
+            for kind in tracks}
+    for kind, run in runs.items():
+        table = run.collision_table()
+        assert run.status.value == "completed" and len(table) == 2, (kind, table)
+        assert table["law_flag"].tolist() == [0, 1], kind  # no merge row at the first collision
+        assert table["t"][1] == pytest.approx(1.2031489560086, abs=1e-12), kind
+        assert run.mode_changes[-1].clusters == ((1, 2),)
+    circle = runs["circle"].collision_table()
+    for kind in ("arcs", "curve"):
+        table = runs[kind].collision_table()
+        loss = lambda tb: tb["energy_before"][0] - tb["energy_after"][0]  # noqa: E731
+        assert loss(table) == pytest.approx(loss(circle), rel=1e-12), kind
