@@ -1,8 +1,26 @@
+import os
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+
+#: heyoka keeps compiled code in an on-disk cache (by default ~/.cache/heyoka, up to 20 GiB), and every new
+#: process that compiles reads through all of it first (README, "What a run writes": 4.9 s for 7.8 GiB).
+#: One run of this suite adds ~0.6 GiB of shapes no user scene needs: it gets a cache of its own, which
+#: its subprocesses (the CLI tests) inherit, capped at TEST_CACHE_LIMIT (heyoka evicts the least recently
+#: used). HEYOKA_CACHE_DIR, heyoka's own variable, is read when heyoka is imported: set here, before any
+#: test module imports heyroll. A HEYOKA_CACHE_DIR already set is kept.
+TEST_CACHE_LIMIT = 2 * 2**30
+os.environ.setdefault("HEYOKA_CACHE_DIR", str(
+    Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "heyroll-tests" / "heyoka"))
+
+
+def pytest_configure(config):
+    import heyoka
+
+    if heyoka.llvm_state.get_diskcache_enabled() and heyoka.llvm_state.get_diskcache_limit() > TEST_CACHE_LIMIT:
+        heyoka.llvm_state.set_diskcache_limit(TEST_CACHE_LIMIT)
 EXAMPLE = ROOT / "examples" / "disk_and_ring.toml"
 
 
