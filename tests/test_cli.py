@@ -389,6 +389,20 @@ def test_a_run_with_no_trajectory_to_draw_writes_its_summary_and_says_no_figures
     assert _finite_or_null({"e": [1.0, float("nan"), float("inf")], "s": "x"}) == {"e": [1.0, None, None], "s": "x"}
 
 
+def test_a_circle_run_stopped_at_its_start_draws_no_empty_figures(tmp_path, capsys):
+    """Acceptance test: a body placed where a one-sided circle cannot hold it stops at t = 0 (left_track); its
+    energy.png and phase_portrait.png were empty axes, listed in files. Now: no figures, and why."""
+    scene = tmp_path / "left.toml"
+    scene.write_text('[track]\ntype = "circle"\nradius = 1.0\nsides = "one"\n[[bodies]]\nshape = "solid_sphere"\n'
+                     'radius = 0.1\nmass = 1.0\nphi = 2.5\ndphi = 0.0\n')
+    out = tmp_path / "o"
+    assert main(["run", str(scene), "--out", str(out), "--progress", "off"]) == 1
+    assert "no figures: the run has no trajectory to draw (left_track at t = 0 s" in capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "left_track" and summary["files"]["figures"].startswith("none: ")
+    assert not list(out.glob("*.png")) and "energy" not in summary["files"]
+
+
 def test_bad_input_found_after_the_out_directory_was_made_leaves_no_directory(tmp_path, capsys):
     """`billiard portrait --ball 5` on a 4-ball table: exit 2, one line, and the --out it had created is gone
     (an empty directory was left behind: acceptance test); --max-events says one rule for 0 and -5."""

@@ -216,3 +216,20 @@ def test_a_frame_turning_at_1e154_rad_s_is_refused_by_field():
     )
     with pytest.raises(SceneError, match="not a finite double.*frame.omega"):
         parse_scene(text)
+
+
+def test_a_circle_body_without_dphi_starts_at_rest_as_on_every_other_track():
+    """Acceptance test: an omitted dphi was 'missing: a number is required' on a circle, while an omitted
+    dx, dangle or vx is 0 on a curve, an arc chain and a table."""
+    scene = heyroll.parse_scene('[track]\ntype = "circle"\nradius = 1.0\n[[bodies]]\nshape = "disk"\nradius = 0.1\n'
+                                'mass = 1.0\nphi = 0.5\n')
+    assert scene.dq == (0,)
+
+
+def test_a_curve_that_overflows_is_refused_without_an_errno_in_its_line():
+    """Acceptance test: y = 0.5*x**2**2**2**2**2 was refused with "(34, 'Numerical result out of range')"."""
+    text = ('[track]\ntype = "curve"\ny = "0.5*x**2**2**2**2**2"\nx_min = -1.5\nx_max = 1.5\n[[bodies]]\n'
+            'shape = "disk"\nradius = 0.05\nmass = 1.0\nx = 0.5\n')
+    with pytest.raises(SceneError, match=r"track\.y: y cannot be evaluated on \[x_min, x_max\]: Numerical result "
+                                         r"out of range \(in"):
+        parse_scene(text)

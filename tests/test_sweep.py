@@ -125,6 +125,28 @@ def test_invalid_points_are_recorded_and_the_sweep_goes_on(tmp_path, capsys):
     assert str(ds["message"].values[0, 1]).startswith("collision.restitution:")
     assert int(ds["collisions"].values[1, 0]) == -1 and np.isnan(ds["t_final"].values[1, 0])
     assert "4 points: 3 invalid_scene, 1 completed" in capsys.readouterr().out
+    # xarray's idioms on the text variables (Zarr's StringDType made where() raise, acceptance test)
+    kept = ds.where(ds["status"] == "completed")
+    assert int(kept["collisions"].count()) == 1 and ds["status"].dtype.kind == "U"
+
+
+def test_a_base_scene_refused_for_what_the_sweep_does_not_vary_is_refused(tmp_path, capsys):
+    """Acceptance test: a typo in [track] (or k = 1.5) while sweeping g wrote a store of 3 invalid_scene points,
+    exit 0. Now: one line, exit 2, nothing written; a base scene refused on a varied KEY is swept."""
+    typo = tmp_path / "typo.toml"
+    typo.write_text(default_scene_text().replace("radius = 1.0", "raduis = 1.0", 1))
+    out = tmp_path / "out"
+    assert main(["sweep", str(typo), "--vary", "g=9:10:3", "--workers", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("heyroll: error: track.raduis: unknown key")
+    assert not out.exists()
+    strong = tmp_path / "strong.toml"
+    strong.write_text(scene_with(default_scene_text(), **{"collision.restitution": "1.5"}))
+    assert main(["sweep", str(strong), "--vary", "g=9:10:3", "--workers", "1", "--out", str(out)]) == 2
+    assert capsys.readouterr().err.startswith("heyroll: error: collision.restitution: must be in [0, 1]")
+    assert not out.exists()
+    ds = run_sweep(strong, vary={"collision.restitution": "0.5:1:2"}, t_end=1.0, workers=1, out=out)
+    assert ds["status"].values.tolist() == ["completed", "completed"]
 
 
 @pytest.mark.parametrize("key, says", [

@@ -182,6 +182,11 @@ def run_figures(result: SimulationResult, out_dir: Path) -> dict:
     rough = scene.rough or scene.forcing is not None
     files = {"phase_portrait": "phase_portrait.png", "energy": "energy.png"}
     if scene.track.linear_gap and not rough:
+        if not float(result.t_final) > 0:  # (stopped at its start: empty axes were drawn, acceptance test)
+            from .outputs import FiguresUnavailable
+
+            raise FiguresUnavailable(f"the run has no trajectory to draw ({result.status.value} at t = 0 s: "
+                                     f"{result.message})")
         phase_portrait_figure(result, out_dir / "phase_portrait.png")
         energy_figure(result, out_dir / "energy.png")
         return files

@@ -293,8 +293,34 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
     precision = parse_precision(precision)
     if batch and precision != "double":
         raise SweepError("--batch", f"heyoka's batch mode is double precision; this sweep is {precision}")
-    return SweepPlan(data, text, source, name, tuple(axes), sample, keep, t_end, max_collisions,
+    plan = SweepPlan(data, text, source, name, tuple(axes), sample, keep, t_end, max_collisions,
                      chunk_points, precision, batch)
+    _check_base_scene(plan)
+    return plan
+
+
+def _check_base_scene(plan: SweepPlan) -> None:
+    """Raise the loader's SceneError where the base scene is refused for a reason the sweep does not vary.
+
+    Acceptance test: a typo in [track] (``raduis``) or k = 1.5 while sweeping g wrote a store of points that
+    were all ``invalid_scene``, exit 0. A point refused for its own values stays a recorded point: a base
+    scene refused on a varied KEY, or one that its first point's values make valid (bodies placed apart by
+    the varied positions), is swept."""
+    from ..interfaces.scene_file import scene_from_dict
+    from .points import point_data
+
+    try:
+        scene_from_dict(plan.data, default_name=plan.default_name)
+        return
+    except SceneError as exc:
+        refused = exc
+    field = str(getattr(refused, "field", ""))
+    if any(field == k.text or field.startswith(k.text + ".") or k.text.startswith(field + ".") for k in plan.keys):
+        return
+    try:
+        scene_from_dict(point_data(plan.data, plan.keys, plan.point_values(0)), default_name=plan.default_name)
+    except SceneError:
+        raise refused from None
 
 
 @dataclass(frozen=True)

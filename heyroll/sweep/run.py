@@ -15,6 +15,7 @@ import json
 import os
 import signal
 import sys
+import threading
 from collections import Counter
 from dataclasses import dataclass
 from decimal import Decimal
@@ -202,7 +203,10 @@ def _executor(chunks: int, workers, scheduler, client):
 
                 # The workers start with Ctrl-C ignored (a terminal's Ctrl-C reaches the whole process group):
                 # this process stops the sweep and closes the cluster; each worker printed its own traceback
-                # of the interruption (review)
+                # of the interruption (review). The price: a Ctrl-C while the cluster starts (its first 1-2 s)
+                # is not seen (README). Blocking it instead, to act on it after, was measured: the workers
+                # Dask spawns do not all keep the mask (a traceback again), and here a signal that is blocked
+                # and ignored is dropped.
                 with signal_handled(signal.SIGINT, signal.SIG_IGN):
                     cluster = stack.enter_context(LocalCluster(
                         n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
@@ -231,8 +235,6 @@ def _connect(client_class, address: str):
     silent (an HTTP server) held the sweep for minutes, and one that answers with text (a banner) made
     Dask read it as a frame length and fail with a MemoryError (review). So the client is made in a
     daemon thread this one waits for, and any error of it is the scheduler's."""
-    import threading
-
     made: dict = {}
 
     def make():

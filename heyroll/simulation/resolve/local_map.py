@@ -28,7 +28,8 @@ from .friction import slipping, slipping_law, slipping_members
 from ..contact_function import CONTACT_VALUES, evaluate
 from .constraints import cluster_impact
 from ..events import (
-    OPEN_ULPS, RESOLUTION_ULPS, SEPARATION_ULPS, below_resolution, close_collision, stop_at_max_collisions,
+    BOUNCE_ULPS, OPEN_ULPS, RESOLUTION_ULPS, SEPARATION_ULPS, below_resolution, close_collision,
+    stop_at_max_collisions,
 )
 
 
@@ -91,7 +92,7 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
     # Friction modes and forcing change the accelerations at the collision: no bound from before it.
     varying = bool(system.friction_blocks) or system.strobe_expression is not None
     # below_resolution holds only if v^2 <= 2 A h_res or v <= A (1 - k) t_res / 2 (see on_collision).
-    h_bound = 2 * RESOLUTION_ULPS * eps
+    h_bound = 2 * BOUNCE_ULPS * eps
     t_bound = (1 - k) * RESOLUTION_ULPS * eps / 2
     d = scene.bodies[pair.i].radius + scene.bodies[pair.j].radius
     length = max(float(hi - lo) for lo, hi in (scene.track.domain(body) for body in scene.bodies))
