@@ -357,3 +357,63 @@ def test_a_plastic_collision_leaves_the_pair_exactly_together_in_every_precision
     assert double.n_collisions == 4 and 3 <= wide.n_collisions <= 4
     table = wide.collision_table(native=True)
     assert all(row["dq_i_after"] == row["dq_j_after"] for row in table)
+
+
+def _mirror_rings(restitution: str) -> str:
+    """16 equal rings started mirror-symmetrically on a circle (phi_i = -phi_17-i, dphi_i = -dphi_17-i)."""
+    phis = [0.2 + 0.26 * i for i in range(8)]
+    rates = [0.9 - 0.3 * i for i in range(8)]
+    text = "[track]\ntype = 'circle'\nradius = 1.0\n"
+    for phi, rate in zip([-p for p in reversed(phis)] + phis, list(reversed(rates)) + [-r for r in rates]):
+        text += f"[[bodies]]\nshape = 'ring'\nradius = 0.08\nmass = 1.0\nphi = {phi!r}\ndphi = {rate!r}\n"
+    return text + f"[collision]\nlaw = 'hedrih'\nrestitution = {restitution}\n"
+
+
+@pytest.mark.parametrize("restitution", ["0.5"])
+def test_a_cluster_hit_from_both_sides_at_one_instant_takes_both_impulses_at_once(restitution):
+    """Review: a resting cluster (rings 5-12) hit at one instant by its two mirror neighbours took the impacts
+    one after the other: the first set it moving (-0.34 rad/s), the second met it moving, and the mirror
+    symmetry was lost there (0.45 at once, the whole cluster drifting at t = 5 s). The impulses on a cluster
+    at one instant are now one complementarity solution: each neighbour leaves at -k times its rate, the
+    cluster stays at rest, the symmetry is kept to round-off, and at k = 1 so is the energy."""
+    scene = heyroll.parse_scene(_mirror_rings(restitution))
+    result = heyroll.simulate(scene, heyroll.RunOptions(t_end=5.0))
+    assert result.status.value == "completed", result.message
+    final = np.asarray(result.final_state, dtype=float)
+    assert np.max(np.abs(final[:16] + final[:16][::-1])) < 1e-11
+    assert np.max(np.abs(final[16:] + final[16:][::-1])) < 1e-11
+    table = result.collision_table()
+    together = table[(table["law_flag"] == 2) & (table["i"] == 4) & (table["j"] == 5)]
+    assert len(together)
+    first = together[0]
+    partner = table[(table["t"] == first["t"]) & (table["i"] == 12) & (table["j"] == 13)]
+    assert len(partner) == 1  # the same instant, the mirror contact
+    k = float(restitution)
+    assert first["dq_i_after"] == pytest.approx(-k * first["dq_i_before"], rel=1e-12)
+    assert partner[0]["dq_j_after"] == pytest.approx(-k * partner[0]["dq_j_before"], rel=1e-12)
+
+
+def test_an_elastic_hit_on_a_resting_cluster_from_both_sides_keeps_the_energy_and_the_symmetry():
+    """Three rings resting together at the bottom (one cluster from the start), two more released from rest
+    at +-1 rad: they hit it at one instant. k = 1: each leaves with its rate reversed, the cluster stays at
+    rest, the energy is kept to round-off (the simultaneous impulses: every active contact reverses)."""
+    import math
+
+    beta = 2 * math.asin(0.08 / 0.92)
+    phis = [-1.0, -beta, 0.0, beta, 1.0]
+    text = "[track]\ntype = 'circle'\nradius = 1.0\n"
+    for phi in phis:
+        text += f"[[bodies]]\nshape = 'ring'\nradius = 0.08\nmass = 1.0\nphi = {phi!r}\ndphi = 0.0\n"
+    text += "[collision]\nlaw = 'hedrih'\nrestitution = 1.0\n"
+    result = heyroll.simulate(heyroll.parse_scene(text), heyroll.RunOptions(t_end=1.0))
+    assert result.status.value == "completed", result.message
+    table = result.collision_table()
+    assert len(table) >= 2 and table["t"][0] == table["t"][1] and set(table["law_flag"][:2]) == {2}
+    first, second = table[0], table[1]
+    assert (first["i"], first["j"], second["i"], second["j"]) == (1, 2, 4, 5)
+    assert first["dq_i_after"] == pytest.approx(-first["dq_i_before"], rel=1e-13)
+    assert second["dq_j_after"] == pytest.approx(-second["dq_j_before"], rel=1e-13)
+    assert abs(second["dq_i_after"]) < 1e-13  # the cluster at rest again
+    assert result.energy_final == pytest.approx(result.energy_initial, rel=1e-13)
+    final = np.asarray(result.final_state, dtype=float)
+    assert np.max(np.abs(final[:5] + final[:5][::-1])) < 1e-13
