@@ -12,6 +12,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: used). HEYOKA_CACHE_DIR, heyoka's own variable, is read when heyoka is imported: set here, before any
 #: test module imports heyroll. A HEYOKA_CACHE_DIR already set is kept.
 TEST_CACHE_LIMIT = 2 * 2**30
+OWN_CACHE = "HEYOKA_CACHE_DIR" not in os.environ  # (a cache the user chose keeps its own limit: review)
 os.environ.setdefault("HEYOKA_CACHE_DIR", str(
     Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "heyroll-tests" / "heyoka"))
 
@@ -19,7 +20,8 @@ os.environ.setdefault("HEYOKA_CACHE_DIR", str(
 def pytest_configure(config):
     import heyoka
 
-    if heyoka.llvm_state.get_diskcache_enabled() and heyoka.llvm_state.get_diskcache_limit() > TEST_CACHE_LIMIT:
+    if OWN_CACHE and heyoka.llvm_state.get_diskcache_enabled() and \
+            heyoka.llvm_state.get_diskcache_limit() > TEST_CACHE_LIMIT:
         heyoka.llvm_state.set_diskcache_limit(TEST_CACHE_LIMIT)
 EXAMPLE = ROOT / "examples" / "disk_and_ring.toml"
 

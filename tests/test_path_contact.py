@@ -56,8 +56,9 @@ def test_a_cluster_on_one_arc_moves_as_the_circles_rigid_cluster(k):
     rc, ra = simulate(circle), simulate(arc)
     assert rc.status.value == ra.status.value == "completed"
     assert [m.clusters for m in ra.mode_changes] == [m.clusters for m in rc.mode_changes] == [(), ((1, 2),)]
-    # The Zeno sequence's end is judged by the resolution: the merge instants agree to ~1e-6 s.
-    assert abs(ra.mode_changes[1].t - rc.mode_changes[1].t) < 1e-6
+    # The Zeno sequence's end is judged by the resolution (its last bounce above BOUNCE_ULPS, the arc's
+    # rounding not the circle's): the merge instants agree to the accumulation's last microseconds.
+    assert abs(ra.mode_changes[1].t - rc.mode_changes[1].t) < 1e-5
     rho = np.array([1 - 0.1, 1 - 0.15])
     fa, fc = np.asarray(ra.final_state, dtype=float), np.asarray(rc.final_state, dtype=float)
     assert np.allclose(fa[:2] / rho - np.pi, fc[:2], atol=1e-8)
@@ -229,3 +230,37 @@ def test_a_plastic_collision_that_the_law_separates_is_not_glued_on_a_path_track
         table = runs[kind].collision_table()
         loss = lambda tb: tb["energy_before"][0] - tb["energy_after"][0]  # noqa: E731
         assert loss(table) == pytest.approx(loss(circle), rel=1e-12), kind
+
+
+def test_real_plastic_bounces_are_resolved_whatever_track_lies_beyond():
+    """Review: the chatter test compared a bounce's flight with the whole track's time scale, so straight ends
+    of 1000 m (never reached) glued a pair whose k = 0 bounces were real and dying out (flights 0.19, 0.11,
+    0.047 s ...): 3 rows instead of 14, contact 0.18 s early, 1.1e-3 J off. It is now local to the pair (the
+    opening against the closing): the circle, the arc equal to it and the arc between 100 m lines agree."""
+    law = "[collision]\nlaw = 'hedrih'\nrestitution = 0.0\n"
+    arc = ("[[track.segments]]\nkind = 'arc'\nradius = 1.0\nside = 'concave'\nstart = -1.5707963267948966\n"
+           "end = 1.5707963267948966\n")
+
+    def bodies(segment):
+        return (f"[[bodies]]\nshape = 'disk'\nradius = 0.05\nmass = 1.0\nsegment = {segment}\nangle = -0.5\n"
+                f"dangle = 0.2\n[[bodies]]\nshape = 'ring'\nradius = 0.1\nmass = 0.6\nsegment = {segment}\n"
+                "angle = 0.3\ndangle = 0.0\n")
+
+    line = "[[track.segments]]\nkind = 'line'\nlength = 100.0\nangle = {}\n"
+    scenes = {
+        "circle": "[track]\ntype = 'circle'\nradius = 1.0\n[[bodies]]\nshape = 'disk'\nradius = 0.05\nmass = 1.0\n"
+                  "phi = -0.5\ndphi = 0.2\n[[bodies]]\nshape = 'ring'\nradius = 0.1\nmass = 0.6\nphi = 0.3\n",
+        "arc": "[track]\ntype = 'arcs'\nstart_x = -1.0\nstart_y = 1.0\n" + arc + bodies(1),
+        "lines": "[track]\ntype = 'arcs'\nstart_x = -1.0\nstart_y = 101.0\n" + line.format(-1.5707963267948966)
+                 + arc + line.format(1.5707963267948966) + bodies(2),
+    }
+    runs = {name: simulate(heyroll.parse_scene(text + law), heyroll.RunOptions(t_end=3.0))
+            for name, text in scenes.items()}
+    circle = runs["circle"].collision_table()
+    assert len(circle) >= 10
+    for name in ("arc", "lines"):
+        table = runs[name].collision_table()
+        assert len(table) >= 10 and np.allclose(table["t"][:10], circle["t"][:10], rtol=0, atol=1e-9), name
+        loss = runs[name].energy_initial - runs[name].energy_final
+        assert loss == pytest.approx(runs["circle"].energy_initial - runs["circle"].energy_final, rel=1e-8), name
+        assert abs(float(runs[name].mode_changes[1].t) - float(runs["circle"].mode_changes[1].t)) < 1e-3

@@ -83,7 +83,6 @@ BAD = {
     "missing track type": (scene_text(body(), track="radius = 1.0"), "track.type"),
     "missing bodies": ('[track]\ntype = "circle"\nradius = 1.0\n', "bodies"),
     "missing phi": (scene_text(body().replace("\nphi = 0.0\n", "\n")), "bodies[1].phi"),
-    "missing dphi": (scene_text(body().replace("dphi = 0.0\n", "")), "bodies[1].dphi"),
     "missing shape": (scene_text(body().replace('shape = "solid_sphere"\n', "")), "bodies[1].shape"),
     "typo in body": (scene_text(body(extra="radus = 0.1")), "bodies[1].radus"),
     "typo at top": (scene_text(body(), extra="gravity = 9.8"), "gravity"),

@@ -147,6 +147,13 @@ def test_a_base_scene_refused_for_what_the_sweep_does_not_vary_is_refused(tmp_pa
     assert not out.exists()
     ds = run_sweep(strong, vary={"collision.restitution": "0.5:1:2"}, t_end=1.0, workers=1, out=out)
     assert ds["status"].values.tolist() == ["completed", "completed"]
+    # A base scene refused on a field that the varied values change (body 2 placed onto body 1, its radius
+    # varied) is swept in either order (review: one point decided, so the order did).
+    near = tmp_path / "near.toml"
+    near.write_text(default_scene_text().replace("phi = 0.5", "phi = -0.75"))
+    for spec in ("0.15:0.05:3", "0.05:0.15:3"):
+        ds = run_sweep(near, vary={"bodies[2].radius": spec}, t_end=0.5, workers=1, out=tmp_path / spec)
+        assert "invalid_scene" in ds["status"].values.tolist() and "completed" in ds["status"].values.tolist()
 
 
 @pytest.mark.parametrize("key, says", [

@@ -41,6 +41,9 @@ SWEEP_TABLE_KEYS = {"vary", "values", "random", "samples", "seed", "keep", "prec
 #: memory (RunOptions.chunk_size), and the first M impacts are read from there.
 MAX_FIRST = 65536
 
+#: Points of a sweep tried before its base scene is refused (_check_base_scene).
+BASE_CHECK_POINTS = 8
+
 #: The coordinate each track type's bodies are placed by (README: phi on a circle).
 COORDINATES = {"circle": "phi", "curve": "x", "arcs": "s", "three_arcs": "s", "parametric": "u", "table": "x"}
 
@@ -300,27 +303,34 @@ def make_plan(scene=None, *, scene_text=None, grid=(), random=(), samples=None, 
 
 
 def _check_base_scene(plan: SweepPlan) -> None:
-    """Raise the loader's SceneError where the base scene is refused for a reason the sweep does not vary.
+    """Raise the loader's SceneError where the base scene is refused for a reason the sweep does not change.
 
     Acceptance test: a typo in [track] (``raduis``) or k = 1.5 while sweeping g wrote a store of points that
-    were all ``invalid_scene``, exit 0. A point refused for its own values stays a recorded point: a base
-    scene refused on a varied KEY, or one that its first point's values make valid (bodies placed apart by
-    the varied positions), is swept."""
+    were all ``invalid_scene``, exit 0. A point refused for its own values stays a recorded point: the base
+    scene is refused only where its refusal names no varied KEY and up to BASE_CHECK_POINTS points spread over
+    the sweep (its first and last among them) are refused with the very same message. (One point decided it
+    at first: the same points in the other order, or another seed, were refused or swept, review.)"""
     from ..interfaces.scene_file import scene_from_dict
     from .points import point_data
 
-    try:
-        scene_from_dict(plan.data, default_name=plan.default_name)
+    def refusal(data) -> str | None:
+        try:
+            scene_from_dict(data, default_name=plan.default_name)
+        except SceneError as exc:
+            return exc
+        return None
+
+    refused = refusal(plan.data)
+    if refused is None:
         return
-    except SceneError as exc:
-        refused = exc
     field = str(getattr(refused, "field", ""))
     if any(field == k.text or field.startswith(k.text + ".") or k.text.startswith(field + ".") for k in plan.keys):
         return
-    try:
-        scene_from_dict(point_data(plan.data, plan.keys, plan.point_values(0)), default_name=plan.default_name)
-    except SceneError:
-        raise refused from None
+    for n in sorted({int(x) for x in np.linspace(0, plan.n_points - 1, BASE_CHECK_POINTS)}):
+        other = refusal(point_data(plan.data, plan.keys, plan.point_values(n)))
+        if other is None or str(other) != str(refused):
+            return
+    raise refused
 
 
 @dataclass(frozen=True)
