@@ -34,7 +34,6 @@ import numpy as np
 
 from ..model.laws import GeneralizedNewtonLaw, ImpulseMap, impulse_map
 from ..model._numbers import DEKKER_SPLIT, TOUCHING_SLACK, halves, workprec
-from .resolve.complementarity import complementarity
 from .resolve.friction import slipping, slipping_law, slipping_members
 from .compiled_cache import by_constants
 from .system import SceneSystem, overlap_tolerance, unit_acceleration, unit_jerk
@@ -1125,66 +1124,6 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
     return settle
 
 
-def cluster_contacts(system: SceneSystem, a: int, b: int) -> tuple:
-    """The watched contacts of the clusters among units ``a`` and ``b`` (each contact once, in order)."""
-    clusters = {u for u in (a, b) if system.units[u].is_cluster}
-    return tuple(n for n, c in enumerate(system.contacts) if c.unit_a in clusters or c.unit_b in clusters)
-
-
-def impacts_on_a_cluster(system: SceneSystem, s, t, number: int, shared: tuple, restitution, log: CollisionLog):
-    """A cluster hit at several contacts at one instant: their impulses at once, or None (one contact closing).
-
-    Each contact of ``shared`` (:func:`cluster_contacts`) that touches and closes now takes part, ``number``
-    (whose event fired) among them. The law is the one a body or cluster hitting a cluster collides by
-    (Newton's law on psi' with the units' total generalized masses G, k the scene's restitution), for all the
-    contacts together: impulses L >= 0 with every separation rate sigma' = sigma + A L >= -k sigma and
-    complementary to L (:func:`complementarity`; A_pq = sum over units u of s_pu s_qu / G_u, s = -1 for a
-    contact's first unit, +1 for its second). One after the other, the impulses made the outcome depend on
-    which contact fired first: 16 equal rings started mirror-symmetrically, a resting cluster hit by its two
-    mirror neighbours at once, lost the symmetry there (review). At k = 1 the energy is kept (every active
-    contact reverses its rate), at k < 1 each row loses (1 - k^2)/2 of what Newton's law on its pair would.
-    One row per contact with an impulse (law_flag 2), each applied to the state the previous left; then
-    (True or False, the units involved); False where max_collisions stops the run.
-    """
-    nu = system.n_units
-    eps = system.precision.epsilon
-    contacts = system.contacts
-    closing = []
-    for p in shared:
-        c = contacts[p]
-        pa, pb = s[c.unit_a], s[c.unit_b]
-        if p != number and abs(pb - pa + system.gap_constants[p]) > RESOLUTION_ULPS * eps * (1 + abs(pa) + abs(pb)):
-            continue
-        va, vb = s[nu + c.unit_a], s[nu + c.unit_b]
-        if vb - va < -SEPARATION_ULPS * eps * (abs(va) + abs(vb)):
-            closing.append(p)
-    if len(closing) < 2 or number not in closing:
-        return None
-    num = system.precision.number
-    zero = num(0)
-    units = sorted({u for p in closing for u in (contacts[p].unit_a, contacts[p].unit_b)})
-    with workprec():
-        mass = {u: num(mpmath.fsum(mpmath.mpf(system.gen_mass[m]) for m in system.units[u].members)) for u in units}
-        one_k = num(1 + mpmath.mpf(restitution))
-    pushes = [((contacts[p].unit_a, -1), (contacts[p].unit_b, 1)) for p in closing]
-    matrix = [[sum((sp * sq / mass[u] for u, sp in push_p for v, sq in push_q if u == v), zero) for push_q in pushes]
-              for push_p in pushes]
-    rates = [s[nu + contacts[p].unit_b] - s[nu + contacts[p].unit_a] for p in closing]
-    impulses = complementarity(matrix, [one_k * rate for rate in rates], zero)
-    if impulses is None:
-        return None
-    for p, push, impulse in zip(closing, pushes, impulses):
-        if not impulse > zero:
-            continue
-        before = system.expand(s.tolist())
-        for u, sign in push:
-            s[nu + u] = s[nu + u] + sign * impulse / mass[u]
-        log.records.append((t, contacts[p].pair_index, before, None, system.expand(s.tolist()), 2))
-        if log.max_collisions is not None and log.count >= log.max_collisions:
-            return stop_at_max_collisions(log.stop, log.max_collisions), units
-    return True, units
-
-
 def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float,
                         settle=None, touched=None):
     """Collisions when some bodies move as clusters: the state holds unit coordinates.
@@ -1209,8 +1148,6 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
     stop = log.stop
     reopened = reopening_check(system, number, log, holder, touched, settle) if system.gap_reopening else None
     gap_motion = GapMotion(system, holder)
-    # (smooth tracks: a slipping member's translational mass would make the law differ per contact)
-    shared = cluster_contacts(system, a, b) if not both_free and not system.friction_blocks else ()
 
     def resolve(s, t) -> bool:
         """Apply the law (or the policy), record it; False: stop the run (policy, max_collisions)."""
@@ -1253,15 +1190,10 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
         s = holder[0]
         t, t_lo = ta.dtime
         touched[number] = (t, t_lo)
-        together = impacts_on_a_cluster(system, s, t, number, shared, scene.law.restitution, log) \
-            if len(shared) > 1 else None
-        if together is None:
-            if not resolve(s, t):
-                return False
-        elif not together[0]:
+        if not resolve(s, t):
             return False
         if settle is not None:
-            if not settle(s, t, (a, b) if together is None else together[1], number):
+            if not settle(s, t, (a, b), number):
                 return False
             gap = s[b] - s[a] + system.gap_constants[number]
             if gap < 0 and (s[nu + b] - s[nu + a]) * SLOW_REOPENING < -gap:
