@@ -313,7 +313,7 @@ def _check_base_scene(plan: SweepPlan) -> None:
     from ..interfaces.scene_file import scene_from_dict
     from .points import point_data
 
-    def refusal(data) -> str | None:
+    def refusal(data) -> SceneError | None:
         try:
             scene_from_dict(data, default_name=plan.default_name)
         except SceneError as exc:

@@ -181,13 +181,11 @@ def make_local_callback(scene, system, number, log, holder, time_scale, function
         acc0, gi, gj, si, sj, vi0, vj0 = seen
         vi, vj = s[nu + a], s[nu + b]
         # Positions do not change in a collision: nor the gradient. The paper's law acts on the
-        # speeds along the track; where the track curves between the two contact points its
-        # opening is not -k times the closing (measured: 9.4e-7 m/s after every plastic collision
-        # of two bodies on a curve, 10,000 bounces of 4 us that never die out, then a missed
-        # one). The bounces judged are the law's own, each k times the one before.
+        # speeds along the track, so the opening is not -k times the closing; which of the two the
+        # bounces are judged by, judged_opening says (k times the closing is a lower bound of it).
         closing = abs(float(gi) * vi0 + float(gj) * vj0)
         bounce = k * closing
-        opening = min(float(gi * vi + gj * vj), bounce)  # a lower bound of judged_opening's
+        opening = min(float(gi * vi + gj * vj), bounce)
         vi, vj = float(vi), float(vj)
         bound = 8 * (abs(acc0) + (vi0 * vi0 + vj0 * vj0 + vi * vi + vj * vj) * (si * si + sj * sj) / curvature_scale)
         scale = 1 + abs(float(s[a])) + abs(float(s[b]))
