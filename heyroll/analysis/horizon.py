@@ -389,18 +389,16 @@ def lyapunov_estimate(
                 resets += 1
                 y = [xi + d0 * c / n0 for xi, c in zip(x1, direction)]
                 x = x1
-                if last and attempt:
-                    break
-                continue
-            delta = [b - c for b, c in zip(y1, x1)]
-            d = norm(delta)
-            if d == 0:
-                delta, d = [d0 * c / n0 for c in direction], d0
-            log_sum += mpmath.log(d / d0)
-            times.append(elapsed)
-            history.append(float(log_sum / elapsed))
-            x = x1
-            y = [xi + d0 * c / d for xi, c in zip(x1, delta)]
+            else:
+                delta = [b - c for b, c in zip(y1, x1)]
+                d = norm(delta)
+                if d == 0:
+                    delta, d = [d0 * c / n0 for c in direction], d0
+                log_sum += mpmath.log(d / d0)
+                times.append(elapsed)
+                history.append(float(log_sum / elapsed))
+                x = x1
+                y = [xi + d0 * c / d for xi, c in zip(x1, delta)]
             if last and attempt:  # the last segment was shortened to end off a collision: the estimate ends there
                 break
     exponent = history[-1] if history else math.nan

@@ -249,6 +249,12 @@ def evaluate(node: Node, x, lib: Library):
     return a**b
 
 
+def evaluation_error(exc: Exception) -> str:
+    """Why evaluating (or folding) an expression failed, without an errno: math's OverflowError says
+    "(34, 'Numerical result out of range')" (acceptance test)."""
+    return str(exc.args[-1]) if len(exc.args) > 1 else str(exc)
+
+
 def _is_whole(text: str) -> bool:
     d = Decimal(text)
     return d == d.to_integral_value() and abs(d) <= 64

@@ -60,7 +60,7 @@ class CurveTrack:
             d2f = ex.derivative(df)
             d3f = ex.derivative(d2f)
         except (ZeroDivisionError, OverflowError, ValueError) as exc:  # constants folded while differentiating
-            raise SceneError(f"{field}.y", f"cannot be evaluated: {_reason(exc)} (in {y!r})") from None
+            raise SceneError(f"{field}.y", f"cannot be evaluated: {ex.evaluation_error(exc)} (in {y!r})") from None
         track = cls(text=y, f=f, df=df, d2f=d2f, d3f=d3f, x_min=lo, x_max=hi)
         xs = track.check_grid()
         with np.errstate(all="ignore"):
@@ -68,7 +68,7 @@ class CurveTrack:
                 try:
                     values = track.numeric(node, xs)
                 except (ZeroDivisionError, OverflowError, ValueError) as exc:  # e.g. 1/0, 2**10000
-                    raise SceneError(f"{field}.y", f"{what} cannot be evaluated on [x_min, x_max]: {_reason(exc)} "
+                    raise SceneError(f"{field}.y", f"{what} cannot be evaluated on [x_min, x_max]: {ex.evaluation_error(exc)} "
                                      f"(in {y!r})") from None
                 bad = ~np.isfinite(values)
                 if bad.any():
@@ -203,9 +203,3 @@ def numeric(node: ex.Node, x) -> np.ndarray:
 
 def _as_expression(value):
     return value if isinstance(value, hy.expression) else hy.expression(float(value))
-
-
-def _reason(exc: Exception) -> str:
-    """An arithmetic error's text without its errno: math's OverflowError says "(34, 'Numerical result out of
-    range')" (acceptance test)."""
-    return str(exc.args[-1]) if len(exc.args) > 1 else str(exc)

@@ -58,7 +58,7 @@ class ParametricTrack:
                 d1 = ex.derivative(node)
                 nodes[name] = (node, d1, ex.derivative(d1))
             except (ZeroDivisionError, OverflowError, ValueError) as exc:
-                raise SceneError(f"{field}.{name}", f"cannot be evaluated: {exc} (in {text!r})") from None
+                raise SceneError(f"{field}.{name}", f"cannot be evaluated: {ex.evaluation_error(exc)} (in {text!r})") from None
         for name, value in (("u_min", u_min), ("u_max", u_max)):
             if not is_finite(value):
                 raise SceneError(f"{field}.{name}", f"must be a finite number, got {value!r}")
@@ -74,8 +74,8 @@ class ParametricTrack:
                 try:
                     values = track.numeric(node, us)
                 except (ZeroDivisionError, OverflowError, ValueError) as exc:
-                    raise SceneError(f"{field}.{what[-1]}", f"{what} cannot be evaluated on [u_min, u_max]: {exc}") \
-                        from None
+                    raise SceneError(f"{field}.{what[-1]}", f"{what} cannot be evaluated on [u_min, u_max]: "
+                                     f"{ex.evaluation_error(exc)}") from None
                 bad = ~np.isfinite(values)
                 if bad.any():
                     raise SceneError(f"{field}.{'x' if 'x' in what else 'y'}",
