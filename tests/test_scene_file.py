@@ -88,6 +88,9 @@ BAD = {
     "typo at top": (scene_text(body(), extra="gravity = 9.8"), "gravity"),
     "typo in run": (scene_text(body(), extra="[run]\nt_stop = 5.0"), "run.t_stop"),
     "typo in collision": (scene_text(TWO, extra="[collision]\nrestitucion = 0.5"), "collision.restitucion"),
+    # acceptance test: `heyroll run` passed a [sweep] table's typo silently (it ignores the table)
+    "typo in sweep": (scene_text(body(), extra='[sweep]\nvarry = "g=9:10:3"'), "sweep.varry"),
+    "sweep not a table": (scene_text(body()).replace("g = 9.81", 'g = 9.81\nsweep = "g=9:10:3"'), "sweep"),
     "typo in track": (scene_text(body(), track='type = "circle"\nradius = 1.0\nradiuss = 2.0'), "track.radiuss"),
     "string number": (scene_text(body(mass='"heavy"')), "bodies[1].mass"),
     "t_end <= 0": (scene_text(body(), extra="[run]\nt_end = 0.0"), "run.t_end"),

@@ -22,8 +22,11 @@ from ..model.scene import STANDARD_GRAVITY, RunSettings, Scene
 from ..model.tracks import ArcChainTrack, CircleTrack, CurveTrack, ParametricTrack, Segment, ThreeArcTrack
 
 #: "sweep": a scene file may hold the [sweep] table of `heyroll sweep` (heyroll.sweep.plan checks
-#: it); a single run ignores it.
+#: its values); a single run ignores it, but its key names are checked here for every command, so
+#: that a typo there is not passed silently by `heyroll run` (acceptance test).
 TOP_KEYS = {"name", "g", "track", "bodies", "collision", "run", "frame", "sweep", "forcing"}
+#: Keys of a scene file's [sweep] table (the sweep command's flags without dashes).
+SWEEP_TABLE_KEYS = {"vary", "values", "random", "samples", "seed", "keep", "precision", "batch"}
 TRACK_KEYS = {"type", "radius", "friction", "static_friction", "sides"}
 TRACK_TYPES = ("circle", "curve", "arcs", "three_arcs", "parametric", "table")
 #: Keys of each path track type (paper section 5).
@@ -86,6 +89,7 @@ def parse_scene(text: str, *, source: str = "<scene>", default_name: str = "scen
 
 def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
     _no_unknown(data, TOP_KEYS, "")
+    _no_unknown(_table(data, "sweep", required=False), SWEEP_TABLE_KEYS, "sweep")
     name = data.get("name", default_name)
     if not isinstance(name, str):
         raise SceneError("name", "must be a string")

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import SceneError, SceneFileError
 from .errors import SweepError
+from ..interfaces.scene_file import SWEEP_TABLE_KEYS
 from .keys import ALTERNATIVES, Key, parse_key, units
 
 #: Points per chunk (one task, one region write) at most: up to ~0.5 s of work per task on the default
@@ -33,9 +34,6 @@ MAX_CHUNK_POINTS = 1024
 #: A sweep is cut into at least this many chunks where it has the points, so that
 #: every worker of a small cluster gets several tasks (and the progress bar moves).
 MIN_CHUNKS = 16
-
-#: Keys of a scene file's [sweep] table (the CLI's flags without dashes).
-SWEEP_TABLE_KEYS = {"vary", "values", "random", "samples", "seed", "keep", "precision", "batch"}
 
 #: The most impacts ``first:M`` keeps: a run handed to a sink keeps its first chunk of records in
 #: memory (RunOptions.chunk_size), and the first M impacts are read from there.
