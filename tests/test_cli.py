@@ -133,7 +133,14 @@ def test_quad_run_writes_36_digit_round_trip_table(tmp_path):
 
 def test_validate_writes_a_report_with_every_section(tmp_path):
     out = tmp_path / "val"
+    out.mkdir()
+    # acceptance test: an earlier run's table and summary stayed beside the report's figures of another run
+    for name in ("collisions.csv", "summary.json", "lyapunov.png", "birkhoff_map.png"):
+        (out / name).write_text("stale")
+    (out / "notes.txt").write_text("mine")
     assert main(["validate", "--out", str(out), "--collisions", "4"]) == 0
+    assert (out / "notes.txt").read_text() == "mine"
+    assert not any((out / name).exists() for name in ("collisions.csv", "summary.json", "birkhoff_map.png"))
     report = (out / "report.md").read_text()
     for heading in (
         "## Collision times: double, quad and the exact reference",
@@ -155,7 +162,7 @@ def test_a_run_replaces_an_earlier_runs_outputs_and_leaves_other_files(tmp_path)
     out = tmp_path / "out"
     out.mkdir()
     for name in ("collisions.npy", "collisions.parquet", "energy.png", "phase_portrait.png", "passages.csv",
-                 ".collisions.csv.tmp"):
+                 ".collisions.csv.tmp", "report.md", "horizon.png"):  # a report's too: it shares figure names
         (out / name).write_text("stale")
     (out / "notes.txt").write_text("mine")
     assert main(["run", "--out", str(out), "--t-end", "2", "--no-figures", "--progress", "off"]) == 0
@@ -523,3 +530,18 @@ def test_a_sweep_into_a_directory_a_run_is_writing_is_refused(tmp_path, capsys):
         held.close()
     assert main(["sweep", "--vary", "collision.restitution=0.5:1:2", "--out", str(out), "--workers", "1",
                  "--t-end", "1", "--no-figures", "--progress", "off"]) == 0
+
+
+def test_a_validation_interrupted_while_drawing_keeps_no_figures_without_their_report(tmp_path, capsys, monkeypatch):
+    # The report is written last: a Ctrl-C before it left figures with no report beside them.
+    from heyroll.interfaces import report
+
+    def interrupted(scene, out_dir, **kwargs):
+        (out_dir / "energy.png").write_bytes(b"\x89PNG partial")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(report, "validate", interrupted)
+    out = tmp_path / "val"
+    assert main(["validate", "--out", str(out)]) == 130
+    assert capsys.readouterr().err.strip() == "heyroll: validate: interrupted"
+    assert list(out.iterdir()) == []

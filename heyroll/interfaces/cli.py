@@ -541,9 +541,17 @@ def _validate(args) -> int:
     scene = _not_a_table(load_scene(args.scene) if args.scene else default_scene(), "validate")
     out = _out_dir(args.out)
     _writable(out)
+    from .outputs import prepare_run_directory, remove_run_files
     from .report import validate
 
-    path = validate(scene, out, source=args.scene or "<default scene>", collisions=collisions)
+    prepare_run_directory(out)
+    try:
+        path = validate(scene, out, source=args.scene or "<default scene>", collisions=collisions)
+    except (OSError, KeyboardInterrupt) as exc:
+        remove_run_files(out)  # a report is written last: its figures alone are not kept
+        if isinstance(exc, KeyboardInterrupt):
+            raise
+        raise BadInput("--out", f"writing the report to {out} failed: {exc.strerror or exc}; nothing kept") from None
     print(f"wrote {path}")
     return EXIT_OK
 

@@ -211,6 +211,11 @@ def summary_dict(result: SimulationResult, *, scene_source: str, files: dict) ->
 RUN_FILES = ("collisions.csv", "collisions.npy", "collisions.parquet", "passages.csv", "transitions.csv",
              "stroboscopic.csv", "summary.json", "phase_portrait.png", "energy.png", "friction_portrait.png",
              "friction_energy.png", "stroboscopic.png", "impact_map.png", "table_paths.png", "birkhoff_map.png")
+#: What `heyroll validate` writes besides energy.png and phase_portrait.png (RUN_FILES too).
+REPORT_FILES = ("report.md", "series_error.png", "horizon.png", "lyapunov.png")
+#: A run and a validation share figure names, so each replaces the other's outputs too: a run's table
+#: beside a report's figures of another run (or a report showing a run's figures) is stale (acceptance test).
+OUTPUT_FILES = RUN_FILES + REPORT_FILES
 
 
 def writable_problem(out: Path) -> str | None:
@@ -261,10 +266,10 @@ def busy_message(out: Path) -> str:
 
 
 def prepare_run_directory(out_dir: Path) -> None:
-    """Make ``out_dir`` ready for a run: created, and without an earlier run's outputs.
+    """Make ``out_dir`` ready for a run or a validation: created, and without an earlier one's outputs.
 
-    A run replaces every output of an earlier heyroll run in the directory
-    (RUN_FILES and their temporary files), so that no stale table or figure
+    A run or a validation replaces every output of an earlier heyroll run or validation in the
+    directory (OUTPUT_FILES and their temporary files), so that no stale table, report or figure
     sits beside the new ones; other files are left alone. Raises OSError.
     """
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -272,8 +277,8 @@ def prepare_run_directory(out_dir: Path) -> None:
 
 
 def remove_run_files(out_dir: Path) -> None:
-    """Delete a run's outputs (complete or partial) from ``out_dir``."""
-    for name in RUN_FILES:
+    """Delete a run's or a validation's outputs (complete or partial) from ``out_dir``."""
+    for name in OUTPUT_FILES:
         for path in (out_dir / name, out_dir / f".{name}.tmp"):
             if path.is_file():
                 path.unlink()
