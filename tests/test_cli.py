@@ -128,7 +128,14 @@ def test_quad_run_writes_36_digit_round_trip_table(tmp_path):
         digits = row["t"].lstrip("-").replace(".", "").lstrip("0")
         assert len(digits) == 36
         assert heyoka.real128(row["t"]) == t
-    assert json.loads((out / "summary.json").read_text())["significant_digits"] == 36
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["significant_digits"] == 36
+    # acceptance test: the final state was only in floats; a quad run could not be continued from its summary
+    texts = summary["final_state_text"]
+    nb = len(texts)
+    for k, entry in enumerate(texts):
+        assert heyoka.real128(entry["q"]) == result.final_state[k]
+        assert heyoka.real128(entry["dq"]) == result.final_state[nb + k]
 
 
 def test_validate_writes_a_report_with_every_section(tmp_path):
@@ -545,3 +552,22 @@ def test_a_validation_interrupted_while_drawing_keeps_no_figures_without_their_r
     assert main(["validate", "--out", str(out)]) == 130
     assert capsys.readouterr().err.strip() == "heyroll: validate: interrupted"
     assert list(out.iterdir()) == []
+
+
+def test_a_sweep_interrupted_while_drawing_says_its_store_is_whole(tmp_path, capsys, monkeypatch):
+    # Acceptance test: a Ctrl-C after the last point printed "wrote .../sweep.zarr", then "heyroll: sweep:
+    # interrupted", exit 130, both at once. Now one message says what is kept and how to draw the figures.
+    from heyroll.interfaces import cli
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_write_sweep_figures", interrupted)
+    out = tmp_path / "sw"
+    code = main(["sweep", "--vary", "collision.restitution=0.5:1:2", "--out", str(out), "--workers", "1",
+                 "--t-end", "1", "--progress", "off"])
+    captured = capsys.readouterr()
+    assert code == 130
+    assert captured.err == ""
+    assert captured.out.strip().splitlines()[-1] == (f"interrupted while drawing the figures: {out}/sweep.zarr is "
+                                                     f"whole; heyroll plot {out}/sweep.zarr draws them")

@@ -264,3 +264,22 @@ def test_angles_beyond_pi_give_the_run_of_the_same_places_written_within_it():
     assert beyond.status is within.status is heyroll.Status.COMPLETED
     assert beyond.n_collisions == within.n_collisions == 2
     assert np.allclose(beyond.collision_table()["t"], within.collision_table()["t"], rtol=1e-14, atol=0)
+
+
+def test_newton_law_on_bodies_of_different_kappa_says_it_can_gain_energy():
+    """Review: Newton's law on centre speeds gained 0.17 J in one collision of a mixed scene at k = 0.7 (the
+    documented property of eqs. 1-5 with rolling kept) with no word in the run's output."""
+    import heyroll
+
+    particle = heyroll.Body.of_shape("particle", 0, mass=1)
+    disk = heyroll.Body.of_shape("disk", 0.1, mass=1)
+    scene = heyroll.Scene.make(track=heyroll.CircleTrack.of_radius(1), bodies=[particle, disk], phi=[-0.5, 0.5],
+                               dphi=[1.0, -1.0], law=heyroll.make_law("newton", 1))
+    result = heyroll.simulate(scene, t_end=5.0)
+    table = result.collision_table()
+    assert np.any(table["energy_after"] - table["energy_before"] > 1e-3)  # it does gain
+    (warning,) = result.settings["warnings"]
+    assert warning.startswith("collision.law = 'newton' keeps the centres' sum of 1/2 m v^2") and "1 and 2" in warning
+    same = heyroll.Scene.make(track=heyroll.CircleTrack.of_radius(1), bodies=[disk, disk], phi=[-0.5, 0.5],
+                              dphi=[1.0, -1.0], law=heyroll.make_law("newton", 1))
+    assert heyroll.simulate(same, t_end=1.0).settings["warnings"] == []

@@ -482,8 +482,9 @@ def test_high_accuracy_runs_and_agrees(kind, cli):
 
 #: heyroll validate --collisions 2 on the circle takes ~10 s; a run longer than this is a failure. It
 #: compiles the scene in double, long and quad: on a first run (heyoka's disk cache empty, the suite's
-#: other process compiling too) the turning curve's took 60 s and more.
-VALIDATE_TIMEOUT = 240
+#: other process compiling too) the turning curve's took 60 s and more, and on a fresh machine busy with
+#: other work (load ~5 on 2 cores) over 240 s (acceptance test): the limit is there to catch a hang.
+VALIDATE_TIMEOUT = 900
 
 
 @every_track

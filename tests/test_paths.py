@@ -597,7 +597,7 @@ def test_path_branches_drawn_are_the_runs_trajectory_jumping_at_its_collisions()
     n = len(scene.bodies)
 
     def state_at(t):
-        for t0, t1, c_out, expand in result.dense:
+        for t0, t1, c_out, expand, _turns in result.dense:  # (a path track takes no turns out)
             if t0 <= t <= t1:
                 values = np.asarray(c_out(np.array([t])), dtype=float)[0]
                 return values if expand is None else np.array(expand(values.tolist()))

@@ -652,7 +652,13 @@ def _sweep(args, argv: list) -> int:
     print(f"wrote {outcome.path}")
     if not args.no_figures:
         _lock(out)  # (the sweep held it while it wrote the store)
-        _write_sweep_figures(outcome.path, out, None)
+        try:
+            with _sigterm_as_interrupt():
+                _write_sweep_figures(outcome.path, out, None)
+        except KeyboardInterrupt:  # (acceptance test: it said the store was written, then "interrupted")
+            print(f"interrupted while drawing the figures: {outcome.path} is whole; heyroll plot {outcome.path} "
+                  "draws them")
+            return EXIT_INTERRUPTED
     return EXIT_OK
 
 

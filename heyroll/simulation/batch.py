@@ -37,11 +37,14 @@ from ..model.table import is_table
 from .compiled_cache import CompiledCache
 from .driver import (
     HANDLER_SETS, STEP_CHUNK, ModeChange, RunOptions, _collector_paused, _handlers, _overlap, _start, final_status,
+    law_caveats,
     motion_time_scale,
     records_to_arrays, run_limits, simulate,
 )
 from .events import CollisionLog
 from .result import SimulationResult
+from .system import energy_reach
+from .turns import WIND_STEPS, Turns
 
 #: Batch integrators already built, by system shape, width and cooldown.
 _BATCHES = CompiledCache(8)
@@ -87,6 +90,7 @@ class _Point:
     holder: list
     handlers: list
     started: float
+    turns: Turns
     steps: int = 0
     initial_state: np.ndarray = field(default=None)
 
@@ -152,6 +156,9 @@ def _run_group(scenes, starts, numbers, options, width, cooldown, results) -> No
     """The scenes of one shape (``starts``: their driver._start) through one batch integrator, each element
     taking the next scene."""
     ta, slots = _batch_integrator(starts[0].system, width, cooldown)
+    # Whole turns out of the angles as in a scalar run (simulation.turns): one energy reach for the group
+    n_coordinates = starts[0].system.n_coordinates
+    chunk = WIND_STEPS if any(energy_reach(scenes[0]).top_half) else STEP_CHUNK
     t_end_of = [float(run_limits(s, options)[0]) for s in scenes]
     queue = list(range(len(scenes)))
     queue.reverse()
@@ -184,8 +191,13 @@ def _run_group(scenes, starts, numbers, options, width, cooldown, results) -> No
             hi, lo = (np.array(a) for a in ta.dtime)
             load(index)
         while any(r is not None for r in running):
-            ta.propagate_until(targets, max_steps=STEP_CHUNK)
+            ta.propagate_until(targets, max_steps=chunk)
             hi, lo = (np.array(a) for a in ta.dtime)
+            if chunk == WIND_STEPS:
+                state = ta.state
+                for index, run in enumerate(running):
+                    if run is not None:
+                        run[1].turns.take(state[:, index], n_coordinates, run[1].log)
             for index, (outcome, _hmin, _hmax, steps) in enumerate(ta.propagate_res):
                 if running[index] is None:
                     continue
@@ -223,6 +235,8 @@ def _load(scene, start, number, index, ta, slots, options, log):
     touched = getattr(settle, "touched", [])
     touched[:] = [(0.0, 0.0)] * len(touched)
     ta.reset_cooldowns(index)
+    turns = Turns(precision)  # (as at a scalar mode's start)
+    turns.take(ta.state[:, index], system.n_coordinates, log)
     if limit == 0:
         return None
     # as a scalar run's first mode (driver._run): with no pair touching the settler would leave the state
@@ -233,7 +247,7 @@ def _load(scene, start, number, index, ta, slots, options, log):
     slots[0][index] = [(h, element) for h in handlers]
     slots[1][index] = [(h, element) for h in warnings]
     return _Point(number=number, scene=scene, system=system, log=log, holder=holder, handlers=handlers,
-                  started=time.perf_counter(), initial_state=np.array(start.initial_state))
+                  started=time.perf_counter(), turns=turns, initial_state=np.array(start.initial_state))
 
 
 def _result(point: _Point, ta, index: int, outcome, t_end: float, options) -> SimulationResult:
@@ -241,10 +255,12 @@ def _result(point: _Point, ta, index: int, outcome, t_end: float, options) -> Si
     scene, log, precision = point.scene, point.log, options.precision
     hi, lo = ta.dtime
     t_final = float(hi[index]) + float(lo[index])
-    final_state = np.array(point.system.expand(ta.state[:, index].tolist()))
+    full_state = point.system.expand(ta.state[:, index].tolist())
     _t_end, limit, events, _collisions = run_limits(scene, options)
+    final_state = np.array(point.turns.angles(full_state, len(scene.bodies)))
     status, message = final_status(scene, precision, log, outcome, t_end, final_state, limit, events)
-    times, numbers, before, after, flags = records_to_arrays(log.records, len(scene.bodies))
+    times, numbers, before, after, flags = point.turns.records(records_to_arrays(log.records, len(scene.bodies)), 0,
+                                                               len(scene.bodies))
     return SimulationResult(
         scene=scene, status=status, message=message, precision=precision, t_final=t_final,
         initial_state=point.initial_state, final_state=final_state, times=times, pair_numbers=numbers,
@@ -253,7 +269,8 @@ def _result(point: _Point, ta, index: int, outcome, t_end: float, options) -> Si
         settings={"tolerance": float(precision.epsilon), "high_accuracy": False, "fast_math": False,
                   "t_end": float(t_end), "max_collisions": limit, "max_events": log.max_events,
                   "on_inconsistent": scene.on_inconsistent, "inconsistent_collisions": log.fallbacks,
-                  "track_sides": scene.track_sides, "warnings": [log.warnings[k] for k in sorted(log.warnings)],
+                  "track_sides": scene.track_sides,
+                  "warnings": [log.warnings[k] for k in sorted(log.warnings)] + law_caveats(scene),
                   "batch": f"batch of {ta.batch_size} (heyoka SIMD)"},
         total_collisions=log.count, passage_counts=(0, 0),
         mode_changes=(ModeChange(0.0, (), tuple(point.initial_state)),),

@@ -36,6 +36,8 @@ from .result import SimulationResult, Status, counted, passage_table
 from .contact_function import body_function, evaluate
 from .resolve.bounds import left_track_message, parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
+from .turns import WIND_STEPS, Turns
+from .system import energy_reach
 from .system import (
     SceneSystem, Unit, build_system, cluster_unit, link_bodies, singleton_units_of, overlap_tolerance, piece_of, singleton_units,
     unit_acceleration,
@@ -280,6 +282,10 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
     time_scale = motion_time_scale(scene)
 
     stream = _Stream(log, sink, progress, len(scene.bodies))
+    # The circle: whole turns out of the angles (simulation.turns), after every WIND_STEPS steps where a body
+    # can go round, and at every mode's start.
+    turns = stream.turns = Turns(precision) if scene.track.linear_gap else None
+    winds = turns is not None and any(energy_reach(scene).top_half)
     if sink is not None:
         sink.open(scene, scene.pairs, precision)
         log.chunk_size = chunk_size
@@ -346,6 +352,8 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                     _record_merge(scene, log, stream, friction, t, merged_pair, before_projection, full_state, slips)
             merged_pair = None
             ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra
+            if turns is not None:
+                turns.take(ta.state, system.n_coordinates, log, friction)
             ta.dtime = t
             if slots:
                 ta.reset_cooldowns()
@@ -380,16 +388,20 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             if settled:
                 if not idle:
                     full_state = system.expand(ta.state.tolist())
-                    modes[-1] = ModeChange(modes[-1].t, modes[-1].clusters, tuple(full_state), modes[-1].pinned)
+                    modes[-1] = ModeChange(modes[-1].t, modes[-1].clusters, tuple(_reported(turns, full_state)),
+                                           modes[-1].pinned)
                 overlap = _overlap(scene, precision, full_state, "at the start of a mode")
                 if overlap:
                     log.stop.reason, log.stop.message = "overlap", overlap
                 else:
                     optimized = _optimized_successor(system, options, cooldown, handlers, warnings, holder, stream) \
                         if quick else None
+                    wind = (lambda ta, n=system.n_coordinates: turns.take(ta.state, n, log, friction)) if winds \
+                        else None
                     outcome, n_steps, ta = _propagate(
                         ta, log, precision.number(t_end), dense,
-                        None if system.per_body or system.n_units == len(scene.bodies) else system.expand, optimized)
+                        None if system.per_body or system.n_units == len(scene.bodies) else system.expand, optimized,
+                        wind, turns)
                     steps += n_steps
             full_state = system.expand(ta.state.tolist())
             if friction_modes is not None:
@@ -433,7 +445,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                 intervals.append({"i": i + 1, "j": j + 1, "t_start": contacts_open.pop((i, j)), "t_end": float(t[0])})
             else:
                 break
-            modes.append(ModeChange(float(t[0]), _clusters(units), tuple(full_state), _pinned(units)))
+            modes.append(ModeChange(float(t[0]), _clusters(units), tuple(_reported(turns, full_state)), _pinned(units)))
             log.mode_changes += 1
             if log.events_exhausted():
                 break
@@ -449,7 +461,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
     for (i, j), t_start in contacts_open.items():
         intervals.append({"i": i + 1, "j": j + 1, "t_start": t_start, "t_end": float(t_final), "open": True})
     intervals.sort(key=lambda d: (d["t_start"], d["i"]))
-    final_state = np.array(full_state)
+    final_state = np.array(_reported(turns, full_state))  # (its messages give the angles reported)
     status, message = final_status(scene, precision, log, outcome, t_end, final_state, limit, events)
     total = log.count
     if sink is not None:
@@ -460,7 +472,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
     else:
         if friction is not None:
             fill_record_modes(log, friction.modes, [(p.i, p.j) for p in scene.pairs])
-        kept = records_to_arrays(log.records, len(scene.bodies), log.record_modes)
+        kept = stream.arrays()
     if progress is not None:
         progress(float(t_final), total)
     times, numbers, before, after, flags = kept[:5]
@@ -491,7 +503,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             # (with on_inconsistent = "error" the one that stopped the run counts too: it was 0 there)
             "inconsistent_collisions": log.fallbacks + (status is Status.INCONSISTENT),
             "track_sides": scene.track_sides,
-            "warnings": [log.warnings[k] for k in sorted(log.warnings)],
+            "warnings": [log.warnings[k] for k in sorted(log.warnings)] + law_caveats(scene),
         },
         passages=tuple(log.passages) if stream.kept_passages is None else stream.kept_passages,
         passage_counts=(log.n_passages - log.limiter_impacts, log.limiter_impacts),
@@ -500,15 +512,50 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
         table_file=getattr(sink, "path", None) if sink is not None else None,
         contact_intervals=tuple(intervals),
         mode_changes=tuple(modes),
-        transitions=tuple(friction.transitions) if friction is not None else (),
+        transitions=_reported_items(turns, friction.transitions, 2, 4) if friction is not None else (),
         collision_modes=kept[5] if len(kept) > 5 else None,
         collision_spins=kept[6] if len(kept) > 6 else None,
         final_modes=tuple(friction.modes) if friction is not None else (),
         final_slip=tuple(friction.slips) if friction is not None else (),
         friction_work=tuple(friction.work) if friction is not None else (),
         transition_work=tuple(friction.transition_work) if friction is not None else (),
-        strobe=tuple(log.strobe),
+        strobe=_reported_items(turns, log.strobe, 1, 1, len(scene.bodies)),
     )
+
+
+def law_caveats(scene) -> list:
+    """What the scene's law does that a user may not expect, as run warnings (review: Newton's law gained
+    0.17 J in one collision of a mixed three-body scene at k = 0.7, as documented, with no word in the output)."""
+    if scene.law.name != "newton":
+        return []
+    bodies = scene.bodies
+    unequal = [(p.i + 1, p.j + 1) for p in scene.pairs if bodies[p.i].kappa != bodies[p.j].kappa]
+    if not unequal:
+        return []
+    i, j = unequal[0]
+    return [f"collision.law = 'newton' keeps the centres' sum of 1/2 m v^2, not the rolling energy: bodies {i} and "
+            f"{j}{' (and others)' if len(unequal) > 1 else ''} have different kappa, so a collision between them can "
+            "gain energy at any k (use 'newton_generalized' or 'hedrih' to keep it; README, \"Collision laws\")"]
+
+
+def _reported(turns, state) -> list:
+    """A full state [phi_1..phi_N, dphi_1..dphi_N] in the run's angles, as reported: the whole turns put back."""
+    return list(state) if turns is None else turns.angles(state, len(state) // 2)
+
+
+def _reported_items(turns, items, kind: int, field: int, n_bodies: int | None = None) -> tuple:
+    """Stroboscopic samples (t, state) or friction transitions (t, body, old, new, q, dq), as reported: the
+    whole turns each was made with put back in its angle (``field``: its angle or state)."""
+    if turns is None or not turns.changes:
+        return tuple(items)
+    out = []
+    for n, item in enumerate(items):
+        offset = turns.offset_of(kind, n)
+        if offset:
+            value = turns.angles(item[field], n_bodies, offset) if n_bodies is not None else item[field] + offset
+            item = item[:field] + (value,) + item[field + 1:]
+        out.append(item)
+    return tuple(out)
 
 
 #: propagate_until is called for at most this many steps at a time, to see
@@ -516,34 +563,40 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
 STEP_CHUNK = 1 << 16
 
 
-def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None):
+def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None, wind=None, turns=None):
     """propagate_until with the cyclic GC off and Ctrl-C turned into a clean stop: (outcome, steps, ta).
 
     In chunks of STEP_CHUNK steps: a chunk that leaves the time where it was
     means heyoka is stuck (measured: g = 1e29 with a track-force event makes
     it take zero-length steps for ever); the run then stops, status failed.
     ``optimized(ta)``: for a quickly compiled integrator, the optimized one
-    that takes over, in the same state, after QUICK_STEPS steps.
+    that takes over, in the same state, after QUICK_STEPS steps. ``wind(ta)``:
+    whole turns out of the angles (simulation.turns), after every WIND_STEPS
+    steps; ``turns``: the run's, for the dense output's angles.
     """
     steps = 0  # (the cyclic garbage collector is paused for the whole run: _collector_paused)
+    still = 0  # steps that left the time where it was, in a row
     try:
         while True:
             before = ta.dtime
             t0 = ta.time
-            chunk = STEP_CHUNK if optimized is None else QUICK_STEPS
+            chunk = QUICK_STEPS if optimized is not None else WIND_STEPS if wind is not None else STEP_CHUNK
             if dense is None:
                 result = ta.propagate_until(t_end, max_steps=chunk)
             else:
                 result = ta.propagate_until(t_end, max_steps=chunk, c_output=True)
                 if result[4] is not None:
-                    dense.append((float(t0), float(ta.time), result[4], expand))
+                    dense.append((float(t0), float(ta.time), result[4], expand, turns.offset if turns else 0))
             steps += int(result[3])
             if result[0] != hy.taylor_outcome.step_limit:
                 return result[0], steps, ta
+            if wind is not None:
+                wind(ta)
             if optimized is not None:
                 ta, optimized = optimized(ta), None
                 continue
-            if ta.dtime == before:
+            still = still + chunk if ta.dtime == before else 0  # (zero-length steps: heyoka may not count them)
+            if still >= STEP_CHUNK:
                 log.stop.reason = "failed"
                 log.stop.message = (
                     f"the integrator does not advance from t = {float(ta.time):.17g} s ({STEP_CHUNK} steps of "
@@ -824,6 +877,7 @@ class _Stream:
         self.log, self.sink, self.progress, self.n_bodies = log, sink, progress, n_bodies
         self.kept: tuple | None = None  # the first chunk stays in memory for figures
         self.kept_passages: tuple | None = None  # the same for passages, if the sink takes them
+        self.turns = None  # the circle's whole turns taken out of the angles (simulation.turns)
         self.last_report = time.perf_counter()
         self.ta = None
 
@@ -833,7 +887,7 @@ class _Stream:
             return
         if log.record_modes is not None:
             fill_record_modes(log, self.friction.modes, self.pair_bodies)
-        chunk = records_to_arrays(log.records, self.n_bodies, log.record_modes)
+        chunk = self.arrays()
         rows = getattr(self.sink, "rows", None)
         # Ctrl-C or SIGTERM during the write waits for its end (measured: a signal between the
         # sink's write and its row count left a chunk in the file twice).
@@ -861,6 +915,12 @@ class _Stream:
                 self.kept_passages = tuple(log.passages)
             log.passages_flushed += len(log.passages)
             log.passages.clear()
+
+    def arrays(self) -> tuple:
+        """records_to_arrays of the log's records (those not handed on yet), the whole turns put back."""
+        log = self.log
+        arrays = records_to_arrays(log.records, self.n_bodies, log.record_modes)
+        return arrays if self.turns is None else self.turns.records(arrays, log.flushed, self.n_bodies)
 
     def _taken(self, chunk) -> None:
         log = self.log

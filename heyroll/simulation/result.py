@@ -298,7 +298,7 @@ class SimulationResult:
     passages: tuple = ()
     #: (junction passages, limiter impacts) in the whole run (streamed ones included).
     passage_counts: tuple | None = None
-    #: With RunOptions(dense=True): (t0, t1, heyoka continuous output) per propagation.
+    #: With RunOptions(dense=True): (t0, t1, heyoka continuous output, expand, whole turns) per propagation.
     dense: tuple | None = None
     #: Rough tracks: every change of a body's friction mode, (t, body (0-based), from, to, q, q')
     #: (see transition_table); each body's mode and slip velocity w (m/s) at the end.
@@ -379,7 +379,7 @@ class SimulationResult:
         out = np.empty((t.size, 2 * self.n_bodies))
         starts = np.array([d[0] for d in self.dense])
         idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.dense) - 1)
-        for k, (t0, t1, c_out, expand) in enumerate(self.dense):
+        for k, (t0, t1, c_out, expand, turns) in enumerate(self.dense):
             sel = idx == k
             if np.any(sel):
                 values = np.asarray(c_out(np.clip(t[sel], t0, t1)), dtype=float)
@@ -387,6 +387,8 @@ class SimulationResult:
                 # (Rough tracks: slip velocities and friction work follow the rates: dropped here.)
                 out[sel] = values[:, : 2 * self.n_bodies] if expand is None else \
                     np.array([expand(row) for row in values.tolist()])
+                if turns:  # the whole turns taken out of the angles then (simulation.turns)
+                    out[sel, : self.n_bodies] += float(turns)
         return out
 
     @property
@@ -474,6 +476,9 @@ class SimulationResult:
             "precision": self.precision.name,
             "significant_digits": self.precision.digits,
             "t_final_text": self.precision.format(self.t_final),
+            # the run's own digits (long, quad, mp): a run continued from its summary starts where it ended
+            "final_state_text": [{"body": k + 1, "q": self.precision.format(self.final_state[k]),
+                                  "dq": self.precision.format(self.final_state[nb + k])} for k in range(nb)],
             "law": self.scene.law.name,
             "restitution": float(self.scene.law.restitution),
             "contact_intervals": list(self.contact_intervals),

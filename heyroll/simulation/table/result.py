@@ -151,6 +151,12 @@ class TableResult:
                  "vy": final[6 * k + 3], "slip_x": final[6 * k + 4], "slip_y": final[6 * k + 5]}
                 for k in range(n)
             ],
+            # the run's own digits (long, quad, mp), as t_final_text
+            "final_state_text": [
+                dict(body=k + 1, **{name: self.precision.format(self.state_final[6 * k + m])
+                                    for m, name in enumerate(("x", "y", "vx", "vy", "slip_x", "slip_y"))})
+                for k in range(n)
+            ],
             "riding_final": list(self.riding_final),
             "wall_time_s": self.wall_time_s,
             "settings": self.settings,
