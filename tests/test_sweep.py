@@ -287,6 +287,9 @@ def test_a_store_of_another_sweep_is_refused_and_left_as_it_was(tmp_path, capsys
     assert main(["sweep", "--values", "collision.restitution=0.5,1", *common]) == 0
     before = {p: p.stat().st_mtime_ns for p in out.rglob("*")}
     capsys.readouterr()
+    # the same points written otherwise resume the store (review: 0.50:1.2:8 refused 0.5:1.2:8's store)
+    assert main(["sweep", "--values", "collision.restitution=0.50,1.0", *common]) == 0
+    assert "resumed: 2 points were stored already" in capsys.readouterr().out
     assert main(["sweep", "--values", "collision.restitution=0.5,0.9", *common]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "belongs to a different sweep (grid differ)" in err

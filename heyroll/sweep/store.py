@@ -178,7 +178,7 @@ def check_spec(path: Path, plan: SweepPlan, versions: dict) -> None:
                               "use another --out or remove it") from None
     if SPEC_ATTR not in stored:
         raise SweepStoreError("--out", f"{path} exists and is not a heyroll sweep store: use another --out or remove it")
-    old, new = json.loads(stored[SPEC_ATTR]), json.loads(json.dumps(plan.spec()))
+    old, new = (_comparable(spec) for spec in (json.loads(stored[SPEC_ATTR]), json.loads(json.dumps(plan.spec()))))
     if old != new:
         what = ", ".join(k for k in [*new, *(k for k in old if k not in new)] if old.get(k) != new.get(k)) or "format"
         raise SweepStoreError("--out", f"{path} belongs to a different sweep ({what} differ): "
@@ -186,6 +186,22 @@ def check_spec(path: Path, plan: SweepPlan, versions: dict) -> None:
     if stored.get("versions") != versions:
         raise SweepStoreError("--out", f"{path} was written with other versions ({stored.get('versions')}): "
                               "resume it with those, or remove it to start again")
+
+
+def _comparable(spec: dict) -> dict:
+    """A sweep's spec as two sweeps of the same points compare: a grid by its values, each as a number, not by
+    the text it was given in (review: ``0.50:1.2:8`` refused to resume the store of ``0.5:1.2:8``)."""
+    from decimal import Decimal, InvalidOperation
+
+    def number(text):
+        try:
+            return str(Decimal(text).normalize())
+        except (InvalidOperation, TypeError, ValueError):
+            return text
+
+    grid = [{k: ([number(v) for v in axis[k]] if k == "values" else axis[k]) for k in axis if k != "spec"}
+            for axis in spec.get("grid") or []]
+    return {**spec, "grid": grid}
 
 
 def stored_mask(path: Path) -> np.ndarray:
