@@ -692,3 +692,16 @@ def test_a_scalar_with_no_finite_value_is_refused_not_drawn_empty(tmp_path, caps
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--scalar" in err and "energy_initial = 0" in err
     assert not (tmp_path / "f").exists()
+
+
+def test_a_body_given_by_its_shape_is_swept_over_kappa(tmp_path):
+    """Review: bodies[N].kappa is a numeric key, but on a body given by its shape every point was invalid
+    ("give shape or kappa, not both"); kappa now stands for the shape, as mass does for density."""
+    from heyroll.interfaces.scene_file import default_scene_text
+
+    scene = tmp_path / "s.toml"  # (the default scene's ball 1 given by its mass: a density needs a shape)
+    scene.write_text(default_scene_text().replace("density = 7850.0          # steel, kg/m^3", "mass = 0.0329", 1))
+    ds = run_sweep(scene, values={"bodies[1].kappa": "1.4,2"}, t_end=1.0, workers=1, out=tmp_path / "k")
+    assert list(ds["status"].values) == ["completed", "completed"]
+    final = ds["final_state"].values
+    assert not (final[0] == final[1]).all()  # (ball 1 rolls down with kappa 1.4 or 2: not the same motion)

@@ -26,7 +26,9 @@ TABLE_TEXT = {"boundary", "cushion_model", "vertices", "simultaneous"}
 WHOLE_NUMBERS = {"segment", "max_collisions"}
 #: Two ways of giving one quantity: a point that sets one drops the other from its copy of the
 #: scene (varying ``bodies[1].mass`` of a body given by density gives it that mass).
-ALTERNATIVES = {"mass": "density", "density": "mass", "dphi": "omega", "omega": "dphi"}
+ALTERNATIVES = {"mass": "density", "density": "mass", "dphi": "omega", "omega": "dphi",
+                # a body's kappa stands for its shape (review: every point was "give shape or kappa, not both")
+                "kappa": "shape"}
 
 _PART = re.compile(r"([A-Za-z_]+)(?:\[(\d+)\])?$")
 
