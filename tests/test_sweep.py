@@ -717,3 +717,20 @@ def test_the_progress_bar_shows_every_stored_chunk(capsys):
             bar.update(188)
             shown = capsys.readouterr().err.rsplit("\r", 1)[-1]
             assert f"{188 * stored}/3000" in shown
+
+
+def test_figures_of_invalid_points_say_so(tmp_path, monkeypatch):
+    """Review: a 1-D sweep whose points were all invalid drew an empty bifurcation diagram over a made-up axis,
+    with no word why (the 2-D maps counted them)."""
+    from heyroll.sweep import figures
+
+    out = tmp_path / "bad"
+    assert main(["sweep", "--values", "bodies[1].radius=1.5,1.6", "--keep", "impacts:2", "--t-end", "1",
+                 "--workers", "1", "--out", str(out), "--progress", "off", "--no-figures"]) == 0
+    titles, notes = [], []
+    monkeypatch.setattr(figures, "_title", lambda ax, text, fontsize=12: titles.append(text))
+    real = figures._none_to_draw
+    monkeypatch.setattr(figures, "_none_to_draw", lambda ax, count: (notes.append(count), real(ax, count)))
+    paths = figures.sweep_figures(out / "sweep.zarr", out)
+    assert [p.name for p in paths] == ["bifurcation.png"] and paths[0].exists()
+    assert titles and all(", 2 invalid" in t for t in titles) and notes == [0]

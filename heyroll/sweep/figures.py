@@ -84,6 +84,11 @@ def sweep_figures(store, out_dir, scalar: str | None = None, points=None) -> lis
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     title = f"{spec['scene'].get('name', spec['default_name'])}: {ds['status'].size} points"
+    # (review: a 1-D sweep of invalid points drew an empty diagram with no word why; the maps said it)
+    statuses = np.asarray(ds["status"].values).reshape(-1)
+    for text, count in (("invalid", int((statuses == "invalid_scene").sum())), ("not run", int((statuses == "").sum()))):
+        if count:
+            title += f", {count} {text}"
     paths = []
     estimates = [name for name in defaults if name in ("period", "lyapunov", "rotation")]
     if len(keys) == 1:
@@ -129,6 +134,7 @@ def _bifurcation(ds, key: str, path: Path, title: str) -> Path:
     if coordinate == "phi":
         q = (q + np.pi) % (2 * np.pi) - np.pi  # the position on the circle, whatever the turns
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True, constrained_layout=True)
+    _none_to_draw(top, q.size)
     for ax, y, label in ((top, q, f"{symbol}_i at impact ({unit})"),
                          (bottom, rate_i - rate_j, f"closing rate {symbol}'_i − {symbol}'_j ({unit}/s)")):
         ax.scatter(parameter, y, s=2 if y.size < 20000 else 0.3, color="k", linewidths=0)
@@ -148,6 +154,7 @@ def _billiard_bifurcation(ds, key: str, path: Path, title: str) -> Path:
     parameter, s = _flat(ds, key, "impact_boundary_s", cushion)
     _, angle = _flat(ds, key, "impact_reflection_angle", cushion)
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True, constrained_layout=True)
+    _none_to_draw(top, s.size)
     for ax, y, label in ((top, s, "arc length s along the cushion (m)"),
                          (bottom, angle, "reflection angle from the normal (rad)")):
         ax.scatter(parameter, y, s=2 if y.size < 20000 else 0.3, color="k", linewidths=0)
@@ -157,6 +164,13 @@ def _billiard_bifurcation(ds, key: str, path: Path, title: str) -> Path:
     _title(top, f"{title}: cushion impacts among the last {ds.sizes['impact']} impacts each (Birkhoff "
            "coordinates)", fontsize=10)
     return _save(fig, path)
+
+
+def _none_to_draw(ax, count: int) -> None:
+    """Say so on an empty diagram (no point has an impact kept: each invalid, not run or without impacts)."""
+    if not count:
+        ax.text(0.5, 0.5, "no impacts to draw: see the title and the store's status", transform=ax.transAxes,
+                ha="center", va="center", color="0.4")
 
 
 def _title(ax, text: str, fontsize: float = 12) -> None:
