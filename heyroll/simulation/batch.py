@@ -235,7 +235,7 @@ def _load(scene, start, number, index, ta, slots, options, log):
     touched = getattr(settle, "touched", [])
     touched[:] = [(0.0, 0.0)] * len(touched)
     ta.reset_cooldowns(index)
-    turns = Turns(precision)  # (as at a scalar mode's start)
+    turns = log.turns = Turns(precision)  # (as at a scalar mode's start)
     turns.take(ta.state[:, index], system.n_coordinates, log)
     if limit == 0:
         return None

@@ -36,7 +36,7 @@ from .result import SimulationResult, Status, counted, passage_table
 from .contact_function import body_function, evaluate
 from .resolve.bounds import left_track_message, parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
-from .turns import WIND_STEPS, Turns
+from .turns import WIND_DENSE, WIND_GROWTH, Turns, Winder
 from .system import energy_reach
 from .system import (
     SceneSystem, Unit, build_system, cluster_unit, link_bodies, singleton_units_of, overlap_tolerance, piece_of, singleton_units,
@@ -282,9 +282,9 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
     time_scale = motion_time_scale(scene)
 
     stream = _Stream(log, sink, progress, len(scene.bodies))
-    # The circle: whole turns out of the angles (simulation.turns), after every WIND_STEPS steps where a body
+    # The circle: whole turns out of the angles (simulation.turns), between stretches of integration where a body
     # can go round, and at every mode's start.
-    turns = stream.turns = Turns(precision) if scene.track.linear_gap else None
+    turns = stream.turns = log.turns = Turns(precision) if scene.track.linear_gap else None
     winds = turns is not None and any(energy_reach(scene).top_half)
     if sink is not None:
         sink.open(scene, scene.pairs, precision)
@@ -353,7 +353,9 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             merged_pair = None
             ta.state[:] = system.reduce(full_state) + [num(0)] * system.n_extra
             if turns is not None:
-                turns.take(ta.state, system.n_coordinates, log, friction)
+                with signals_deferred():  # (the state, its turns and full_state move together)
+                    if turns.take(ta.state, system.n_coordinates, log, friction):
+                        full_state = system.expand(ta.state.tolist())
             ta.dtime = t
             if slots:
                 ta.reset_cooldowns()
@@ -396,12 +398,14 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                 else:
                     optimized = _optimized_successor(system, options, cooldown, handlers, warnings, holder, stream) \
                         if quick else None
-                    wind = (lambda ta, n=system.n_coordinates: turns.take(ta.state, n, log, friction)) if winds \
-                        else None
+                    wind = Winder(turns, system.n_coordinates, log, friction,
+                                  WIND_GROWTH if dense is None else WIND_DENSE, STEP_CHUNK) if winds else None
                     outcome, n_steps, ta = _propagate(
                         ta, log, precision.number(t_end), dense,
                         None if system.per_body or system.n_units == len(scene.bodies) else system.expand, optimized,
                         wind, turns)
+                    if turns is not None:
+                        turns.settle(ta.state)  # (a shift a Ctrl-C cut in two: see Turns.take)
                     steps += n_steps
             full_state = system.expand(ta.state.tolist())
             if friction_modes is not None:
@@ -570,9 +574,9 @@ def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None, wind=Non
     means heyoka is stuck (measured: g = 1e29 with a track-force event makes
     it take zero-length steps for ever); the run then stops, status failed.
     ``optimized(ta)``: for a quickly compiled integrator, the optimized one
-    that takes over, in the same state, after QUICK_STEPS steps. ``wind(ta)``:
-    whole turns out of the angles (simulation.turns), after every WIND_STEPS
-    steps; ``turns``: the run's, for the dense output's angles.
+    that takes over, in the same state, after QUICK_STEPS steps. ``wind``: a
+    simulation.turns.Winder, whole turns out of the angles after every
+    ``wind.steps`` steps; ``turns``: the run's, for the dense output's angles.
     """
     steps = 0  # (the cyclic garbage collector is paused for the whole run: _collector_paused)
     still = 0  # steps that left the time where it was, in a row
@@ -580,7 +584,7 @@ def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None, wind=Non
         while True:
             before = ta.dtime
             t0 = ta.time
-            chunk = QUICK_STEPS if optimized is not None else WIND_STEPS if wind is not None else STEP_CHUNK
+            chunk = QUICK_STEPS if optimized is not None else wind.steps if wind is not None else STEP_CHUNK
             if dense is None:
                 result = ta.propagate_until(t_end, max_steps=chunk)
             else:
@@ -591,7 +595,7 @@ def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None, wind=Non
             if result[0] != hy.taylor_outcome.step_limit:
                 return result[0], steps, ta
             if wind is not None:
-                wind(ta)
+                wind(ta.state, int(result[3]))
             if optimized is not None:
                 ta, optimized = optimized(ta), None
                 continue

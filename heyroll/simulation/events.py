@@ -117,6 +117,12 @@ class CollisionLog:
     record_modes: list | None = None
     #: The mode handlers built on this log, kept for its next runs (simulation.driver._handlers)
     handler_sets: object = None
+    #: The circle's whole turns taken out of the run's angles (simulation.turns.Turns; None elsewhere)
+    turns: object = None
+
+    def turn_offset(self):
+        """The whole turns taken out of the angles now: what a message adds to a state's angle."""
+        return 0 if self.turns is None else self.turns.offset
 
     def record_passage(self, row: tuple) -> bool:
         """Keep a passage (see ``passages``); False: max_events is reached, the run stops."""
@@ -160,6 +166,7 @@ class CollisionLog:
         self.warnings.clear()
         self.passages.clear()
         self.strobe.clear()
+        self.turns = None
         return self
 
 
@@ -412,7 +419,8 @@ def _track_warning(log, ev, system):
             full = system.expand(ta.update_d_output(t).tolist())
             log.warnings[body] = (
                 f"body {body + 1}: the normal force of the track changes sign at t = {float(t):.17g} s, "
-                f"{system.coordinate} = {float(full[body]):.6g}: the two-sided track holds it (on a one-sided one it would leave here)"
+                f"{system.coordinate} = {float(full[body] + log.turn_offset()):.6g}: the two-sided track holds it "
+                "(on a one-sided one it would leave here)"
             )
 
     return record
@@ -436,7 +444,7 @@ def _track_stopper(log, event, holder, system):
         c = system.coordinate
         log.stop.reason = event.kind
         log.stop.message = (
-            f"body {event.body + 1} {what}, at {c} = {float(full[event.body]):.17g}, "
+            f"body {event.body + 1} {what}, at {c} = {float(full[event.body] + log.turn_offset()):.17g}, "
             f"d{c} = {float(full[system.n_bodies + event.body]):.17g}, t = {float(ta.time):.17g} s"
         )
         return False

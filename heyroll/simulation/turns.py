@@ -6,8 +6,8 @@ with it: ulp(phi) is 1.2e-10 rad at phi = 7e5, and two disks going round for
 1e5 s lost 5e-9 of their energy at k = 1, against 1.4e-13 for the same pair
 oscillating (review). So a run that can go round (a body whose energy reaches
 the upper half of the circle: system.energy_reach) takes whole turns out of
-its angles every WIND_STEPS steps, once the first unit's angle passes
-WIND_AT, and adds them back to every angle it reports (the collision table,
+its angles between stretches of integration (64 steps and more: Winder),
+once the first unit's angle passes WIND_AT, and adds them back to every angle it reports (the collision table,
 the final state, the mode changes, stroboscopic samples, friction transitions
 and dense output): a user sees the same unwrapped phi as before.
 
@@ -29,9 +29,14 @@ import numpy as np
 
 from ..model._numbers import workprec
 
-#: A run that can go round takes whole turns out after every this many steps (the integrator
-#: stops there and goes on with the same steps: its results are those of one long call).
+#: A run that can go round takes whole turns out after every this many steps at least (the integrator
+#: stops there and goes on with the same steps: its results are those of one long call); Winder
+#: sets the stretches' lengths from there.
 WIND_STEPS = 64
+#: ... so that its first angle moves about this far between two looks (rad), or, with dense output,
+#: WIND_DENSE (a continuous output per stretch costs ~1 ms and ~0.2 MB: review).
+WIND_GROWTH = 8 * math.pi
+WIND_DENSE = 1024.0
 #: ... once the first unit's angle is this far from the bottom (m >= 2 turns are taken then, so that
 #: every unit, within 2 pi of the first on the circle, is within a factor 2 of the shift).
 WIND_AT = 4 * math.pi
@@ -44,14 +49,19 @@ class Turns:
     shift after it, in the run's type); an item made after the n-th change is reported with its total.
     """
 
-    __slots__ = ("number", "changes", "_total", "_residual", "offset")
+    __slots__ = ("number", "double", "changes", "_total", "_residual", "offset", "_pending")
 
     def __init__(self, precision):
         self.number = precision.number
+        self.double = precision.name == "double"
         self.changes: list = []
-        self._total = mpmath.mpf(0)  # the shifts taken, summed (exactly: 256 bits hold their sum)
-        self._residual = mpmath.mpf(0)  # m 2 pi summed, less the shifts taken (error feedback)
+        # the shifts taken, summed, and m 2 pi summed less them (error feedback): in double as (hi, lo) pairs of
+        # floats (a turn taken in ~3 us: with mpmath it took 25 us, a body circling alone twice as long), else
+        # as mpmath numbers (256 bits hold them exactly)
+        self._total = (0.0, 0.0) if self.double else mpmath.mpf(0)
+        self._residual = 0.0 if self.double else mpmath.mpf(0)
         self.offset = 0  # the total in the run's type
+        self._pending = None  # a shift begun: (the first angle before it, what it makes of the totals)
 
     def take(self, state, n_coordinates: int, log, friction=None) -> bool:
         """Take whole turns out of ``state[:n_coordinates]`` (a numpy view, in place) where the first is past
@@ -61,21 +71,60 @@ class Turns:
         if -WIND_AT < first < WIND_AT:
             return False
         turns = round(first / (2 * math.pi))
+        shift, residual, total, offset = self._double_shift(turns) if self.double else self._shift(turns)
+        low, high = (shift / 2, shift * 2) if turns > 0 else (shift * 2, shift / 2)
+        angles = state[:n_coordinates]
+        if not all(low <= x <= high for x in angles.tolist()):
+            return False  # (not within a factor 2 of the shift, so not exact: the next chunk's will be)
+        change = (log.count, len(log.strobe), len(friction.transitions) if friction is not None else 0, offset)
+        # The state moves in one numpy operation, then the totals follow: a Ctrl-C between the two (it left the
+        # final state whole turns off, review: 17 of 60 interrupted runs) is settled by settle()
+        self._pending = (angles[0], residual, total, offset, change)
+        angles -= shift
+        self._commit()
+        return True
+
+    def _commit(self) -> None:
+        _, self._residual, self._total, self.offset, change = self._pending
+        self.changes.append(change)
+        self._pending = None
+
+    def settle(self, state) -> None:
+        """After an interruption: a shift that moved ``state`` is recorded, one that did not is forgotten."""
+        if self._pending is not None:
+            if state[0] != self._pending[0]:
+                self._commit()
+            else:
+                self._pending = None
+
+    def _shift(self, turns: int) -> tuple:
+        """(shift, residual, total, offset) in mpmath (long, quad, mp)."""
         with workprec():
             target = turns * 2 * mpmath.pi + self._residual
             shift = self.number(target)
-            low, high = (shift / 2, shift * 2) if turns > 0 else (shift * 2, shift / 2)
-            angles = state[:n_coordinates]
-            if not all(low <= x <= high for x in angles.tolist()):
-                return False  # (not within a factor 2 of the shift, so not exact: the next chunk's will be)
-            angles -= shift
             taken = _mpf(shift)
-            self._residual = target - taken
-            self._total += taken
-            self.offset = self.number(self._total)
-        self.changes.append((log.count, len(log.strobe), len(friction.transitions) if friction is not None else 0,
-                             self.offset))
-        return True
+            total = self._total + taken
+            return shift, target - taken, total, self.number(total)
+
+    def _double_shift(self, turns: int) -> tuple:
+        """(shift, residual, total, offset) in floats: m 2 pi + residual rounded once, with 2 pi as three floats
+        whose first has 13 trailing zero bits (m hi exact for |m| < 2^13), and the total as a compensated sum."""
+        hi, mid, lo = _TWO_PI
+        m = float(turns)
+        if abs(m) >= 2**13:  # (a start far out: once, in mpmath)
+            with workprec():
+                target = turns * 2 * mpmath.pi + self._residual
+                shift = float(target)
+                residual = float(target - mpmath.mpf(shift))
+        else:
+            small = m * mid + (m * lo + self._residual)
+            shift = m * hi + small
+            residual = (m * hi - shift) + small  # (m hi - shift: exact, Sterbenz)
+        total_hi, total_lo = self._total
+        s = total_hi + shift  # Knuth's two-sum: the total to ~106 bits
+        b = s - total_hi
+        total_lo += (total_hi - (s - b)) + (shift - b)
+        return shift, residual, (s, total_lo), s + total_lo
 
     def offset_of(self, kind: int, index: int):
         """The total shift that the ``index``-th item of ``kind`` (0 records, 1 samples, 2 transitions, 0-based)
@@ -109,6 +158,41 @@ class Turns:
                 before[start:stop, :n_bodies] += offset
                 after[start:stop, :n_bodies] += offset
         return arrays
+
+
+class Winder:
+    """Takes whole turns out of a run's angles between stretches of integration, and sets their length: as
+    many steps as moved the first angle by about ``growth`` radians the last time (between WIND_STEPS and
+    ``most``). A fixed 64 steps made one heyoka continuous output (~1 ms, ~0.2 MB: it holds compiled code)
+    per 64 steps of a dense run going round (review: 5.9 s and 1.35 GB against 0.22 s and 0.22 GB), and one
+    Python round trip per 64 steps of a body circling alone."""
+
+    __slots__ = ("turns", "n_coordinates", "log", "friction", "growth", "most", "steps", "_last")
+
+    def __init__(self, turns: Turns, n_coordinates: int, log, friction, growth: float, most: int):
+        self.turns, self.n_coordinates, self.log, self.friction = turns, n_coordinates, log, friction
+        self.growth, self.most, self.steps, self._last = growth, most, WIND_STEPS, None
+
+    def __call__(self, state, steps: int) -> None:
+        """After a stretch of ``steps`` steps that left ``state`` (the integrator's, in place)."""
+        first = float(state[0])
+        if self._last is not None and steps:
+            moved = abs(first - self._last)
+            self.steps = self.most if moved * self.most <= self.growth * steps else \
+                max(WIND_STEPS, int(steps * self.growth / moved))
+        self.turns.take(state, self.n_coordinates, self.log, self.friction)
+        self._last = float(state[0])
+
+
+def _two_pi_parts() -> tuple:
+    with workprec():
+        two_pi = 2 * mpmath.pi
+        hi = float(mpmath.ldexp(mpmath.floor(mpmath.ldexp(two_pi, 37)), -37))  # 40 bits: 2 pi < 8
+        mid = float(two_pi - hi)
+        return hi, mid, float(two_pi - hi - mid)
+
+
+_TWO_PI = _two_pi_parts()
 
 
 def _mpf(x):
