@@ -383,12 +383,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             # expand are copies then), and the mode starts at full_state
             idle = (friction_modes is None and system.n_units == len(scene.bodies)
                     and getattr(settle, "idle", None) is not None and settle.idle(ta.state))
-            # (clusters formed at this instant are met rigidly by the impacts the start resolves: events._make_unit_callback)
-            log.rigid = frozenset(log.fresh) if later_mode and not system.per_body else frozenset()
-            try:
-                settled = idle or settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
-            finally:
-                log.rigid = frozenset()
+            settled = idle or settle(ta.state, ta.time, range(system.n_coordinates), None, skip_merge)
             if friction_modes is not None:  # the modes follow the rates collisions at the mode's start left
                 friction_modes.reconcile(ta, ta.state, ta.time)
                 fill_record_modes(log, friction.modes, stream.pair_bodies, was=was, spins=spins)
@@ -423,8 +418,6 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                     log.stop.reason, log.stop.message = "overlap", overlap
                     break
                 same_instant = same_instant + 1 if float(t[0]) == modes[-1].t else 0
-                if not same_instant:
-                    log.fresh.clear()
                 if same_instant > MAX_CHANGES_AT_ONE_INSTANT * len(scene.bodies):
                     log.stop.reason = "failed"
                     log.stop.message = (
@@ -442,13 +435,10 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
                 units = units[:u] + (dataclasses.replace(units[u], pinned=log.stop.data["end"]),) + units[u + 1:]
             elif reason == "release":
                 units, opened = _release(units, log.stop.data["bodies"])
-                if not system.per_body:  # (the circle: a cluster across the top leaves (N), (1), ...)
-                    units = _canonical(units)
                 for i, j in opened:
                     intervals.append({"i": i + 1, "j": j + 1, "t_start": contacts_open.pop((i, j)), "t_end": float(t[0])})
             elif reason == "merge":
                 contact = system.contacts[log.stop.data["contact"]]
-                log.fresh.add(units[contact.unit_a].members + units[contact.unit_b].members)
                 units, full_state = _merge(scene, system, units, contact, full_state, friction)
                 contacts_open[(contact.pair.i, contact.pair.j)] = float(t[0])
             elif reason == "split":

@@ -123,10 +123,6 @@ class CollisionLog:
     def turn_offset(self):
         """The whole turns taken out of the angles now: what a message adds to a state's angle."""
         return 0 if self.turns is None else self.turns.offset
-    #: The circle: the clusters (member tuples) formed by a merge at the present instant, and those a mode's
-    #: start meets rigidly (set by the driver while it settles that start: _make_unit_callback).
-    fresh: set = field(default_factory=set)
-    rigid: frozenset = frozenset()
 
     def record_passage(self, row: tuple) -> bool:
         """Keep a passage (see ``passages``); False: max_events is reached, the run stops."""
@@ -171,8 +167,6 @@ class CollisionLog:
         self.passages.clear()
         self.strobe.clear()
         self.turns = None
-        self.fresh.clear()
-        self.rigid = frozenset()
         return self
 
 
@@ -1074,9 +1068,6 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
             pending += [u for u in touching_elsewhere(s) if u not in units]
         seen = set(pending)
         judged: set = set()  # contacts found not pressed at this instant (see below)
-        # Contacts found pressed, in order: the first enters persistent contact once no pair closes (k > 0: a
-        # row merged before the impact that runs through it was resolved would be released again at once).
-        pressed: dict = {}
         rounds = 0
         while pending:
             unit = pending.pop()
@@ -1096,8 +1087,6 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                     if not resolvers[number](s, t):
                         return False
                     judged.difference_update(by_unit[a], by_unit[b])  # their rates changed: judge again
-                    for n in by_unit[a] + by_unit[b]:
-                        pressed.pop(n, None)
                     pending += [a, b]
                     seen.update((a, b))
                     continue
@@ -1110,13 +1099,8 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
                         continue
                     acc, jerk = gap_motion(s, a, b, t, va, vb)
                     if below_resolution(v, acc, k, float(t), scale, time_scale, eps, jerk):
-                        if not k:  # (k = 0: at once, clusters are hit rigidly: _make_unit_callback)
-                            stop.reason, stop.data = "merge", {"contact": number}
-                            return False
-                        pressed[number] = True
-        if pressed:  # after every collision of the instant: a pair pressed now is not hit the next moment
-            stop.reason, stop.data = "merge", {"contact": next(iter(pressed))}
-            return False
+                        stop.reason, stop.data = "merge", {"contact": number}
+                        return False
         for number in sorted({n for unit in seen for n in by_unit.get(unit, ())}):
             if number == skip_open:
                 continue
@@ -1152,24 +1136,12 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
                         settle=None, touched=None):
     """Collisions when some bodies move as clusters: the state holds unit coordinates.
 
-    Two free bodies collide by the scene's law (and policy). An impact of a
-    unit on a cluster (a free body on a cluster, cluster on cluster) applies
-    no impulse: the cluster(s) are released at that instant (``stop.reason =
-    "release"``), and the next mode, every body of them free and their gaps 0
-    within resolution, resolves the impact and the chain through the row by
-    the settler at its start (:func:`contact_settler`: closing pairs by their
-    own law, one after another; pressed ones re-merge). Gravity's finite
-    pressing force cannot hold a row rigid against an impulse: a rigid
-    cluster gave Newton's cradle an outcome O(1) away from that of the same
-    row 1e-12 rad apart (the sequential pairwise impulses), which is the
-    limit as the gaps go to 0 (review). At k = 0, and for a cluster formed at
-    this very instant (``log.rigid``), the impact is still Newton's law on
-    psi' with the units' total generalized masses (the cluster rigid through
-    it), recorded with flag 2 (see ``plastic`` below; slipping members on a
-    rough track with their translational mass). Contacts touching at the same
-    instant are then settled by ``settle``, as in the free mode. Returns the
-    event callback; its ``resolve(s, t)`` applies the law alone (or asks for
-    the release: False).
+    Two free bodies collide by the scene's law (and policy); a collision that
+    involves a cluster is Newton's law on psi' with the units' total
+    generalized masses (the cluster moves as one rigid unit through the
+    impact), recorded with flag 2. Contacts touching at the same instant are
+    then settled by ``settle`` (:func:`contact_settler`), as in the free mode.
+    Returns the event callback; its ``resolve(s, t)`` applies the law alone.
     """
     contact = system.contacts[number]
     pair = contact.pair
@@ -1178,13 +1150,6 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
     both_free = not system.units[a].is_cluster and not system.units[b].is_cluster
     law_map, fallback = pair_maps(scene, system.precision)[contact.pair_index]
     law = law_map if both_free else working_map(unit_map(system, a, b, scene.law.restitution), system.precision)
-    # The rigid impulse stays where it is the limit the release would only approach by an endless cascade:
-    # k = 0 (sequential plastic impulses through a touching row tend to the row's common rate, which is the
-    # rigid outcome, geometrically: 64 N rounds at one instant then a merge, released again, ... measured
-    # 2,464 rows at one instant for four disks) and a cluster formed at this very instant (log.rigid: the
-    # instant's cascade has ended, the merge's plastic averaging or an accumulation left its neighbour closing).
-    plastic = scene.law.restitution == 0
-    clusters = {system.units[u].members for u in (a, b) if system.units[u].is_cluster}
     eps = system.precision.epsilon
     k = float(scene.law.restitution)
     strict = scene.on_inconsistent == "error"
@@ -1193,12 +1158,7 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
     gap_motion = GapMotion(system, holder)
 
     def resolve(s, t) -> bool:
-        """Apply the law (or the policy), record it; False: stop the run (policy, max_collisions, a
-        cluster's release)."""
-        if not both_free and not plastic and not log.rigid.intersection(clusters):
-            # the cluster(s) fall apart; the next mode's settler resolves the impact
-            stop.reason, stop.data = "release", {"bodies": (pair.i, pair.j)}
-            return False
+        """Apply the law (or the policy), record it; False: stop the run (policy, max_collisions)."""
         state = s.tolist()
         before = system.expand(state)
         va, vb = state[nu + a], state[nu + b]

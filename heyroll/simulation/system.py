@@ -278,14 +278,6 @@ class SceneSystem:
         return self._unit_floats[unit][0]
 
     @functools.cached_property
-    def _unit_offsets(self) -> tuple:
-        """Per unit: its offsets in the run's type (expand: a released cluster's gaps, which the offsets in double
-        left ~1e-17 rad off touching in long and quad, beyond their resolution: a collision was missed)."""
-        if self.precision.name == "double":
-            return tuple(self.offsets_float(u) for u in range(len(self.units)))
-        return tuple([self.precision.number(o) for o in u.offsets] for u in self.units)
-
-    @functools.cached_property
     def _unit_floats(self) -> tuple:
         """Per unit: its offsets, members' weight moments and total generalized mass, as floats
         (converted once: the contact gates use them after every collision)."""
@@ -305,7 +297,7 @@ class SceneSystem:
         dphi = [0.0] * self.n_bodies
         for u, unit in enumerate(self.units):
             psi, dpsi = unit_state[u], unit_state[nu + u]
-            for k, o in zip(unit.members, self._unit_offsets[u]):
+            for k, o in zip(unit.members, self.offsets_float(u)):
                 phi[k] = psi + o
                 dphi[k] = dpsi
         return phi + dphi
