@@ -99,12 +99,17 @@ class Turns:
 
     def _shift(self, turns: int) -> tuple:
         """(shift, residual, total, offset) in mpmath (long, quad, mp)."""
+        target = self._target(turns)
         with workprec():
-            target = turns * 2 * mpmath.pi + self._residual
             shift = self.number(target)
             taken = _mpf(shift)
             total = self._total + taken
             return shift, target - taken, total, self.number(total)
+
+    def _target(self, turns: int):
+        """m 2 pi plus what the shifts so far left over, at model precision."""
+        with workprec():
+            return turns * 2 * mpmath.pi + self._residual
 
     def _double_shift(self, turns: int) -> tuple:
         """(shift, residual, total, offset) in floats: m 2 pi + residual rounded once, with 2 pi as three floats
@@ -112,9 +117,9 @@ class Turns:
         hi, mid, lo = _TWO_PI
         m = float(turns)
         if abs(m) >= 2**13:  # (a start far out: once, in mpmath)
+            target = self._target(turns)
+            shift = float(target)
             with workprec():
-                target = turns * 2 * mpmath.pi + self._residual
-                shift = float(target)
                 residual = float(target - mpmath.mpf(shift))
         else:
             small = m * mid + (m * lo + self._residual)
