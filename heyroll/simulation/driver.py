@@ -37,9 +37,8 @@ from .contact_function import body_function, evaluate
 from .resolve.bounds import left_track_message, parameters_on_pieces
 from .resolve.constraints import project_onto_contacts
 from .turns import WIND_DENSE, WIND_GROWTH, Turns, Winder
-from .system import energy_reach
 from .system import (
-    SceneSystem, Unit, build_system, cluster_unit, link_bodies, singleton_units_of, overlap_tolerance, piece_of, singleton_units,
+    SceneSystem, Unit, build_system, cluster_unit, energy_reach, link_bodies, singleton_units_of, overlap_tolerance, piece_of, singleton_units,
     unit_acceleration,
 )
 
@@ -516,14 +515,14 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
         table_file=getattr(sink, "path", None) if sink is not None else None,
         contact_intervals=tuple(intervals),
         mode_changes=tuple(modes),
-        transitions=_reported_items(turns, friction.transitions, 2, 4) if friction is not None else (),
+        transitions=_reported_items(turns, friction.transitions, 2) if friction is not None else (),
         collision_modes=kept[5] if len(kept) > 5 else None,
         collision_spins=kept[6] if len(kept) > 6 else None,
         final_modes=tuple(friction.modes) if friction is not None else (),
         final_slip=tuple(friction.slips) if friction is not None else (),
         friction_work=tuple(friction.work) if friction is not None else (),
         transition_work=tuple(friction.transition_work) if friction is not None else (),
-        strobe=_reported_items(turns, log.strobe, 1, 1, len(scene.bodies)),
+        strobe=_reported_items(turns, log.strobe, 1),
     )
 
 
@@ -547,19 +546,9 @@ def _reported(turns, state) -> list:
     return list(state) if turns is None else turns.angles(state, len(state) // 2)
 
 
-def _reported_items(turns, items, kind: int, field: int, n_bodies: int | None = None) -> tuple:
-    """Stroboscopic samples (t, state) or friction transitions (t, body, old, new, q, dq), as reported: the
-    whole turns each was made with put back in its angle (``field``: its angle or state)."""
-    if turns is None or not turns.changes:
-        return tuple(items)
-    out = []
-    for n, item in enumerate(items):
-        offset = turns.offset_of(kind, n)
-        if offset:
-            value = turns.angles(item[field], n_bodies, offset) if n_bodies is not None else item[field] + offset
-            item = item[:field] + (value,) + item[field + 1:]
-        out.append(item)
-    return tuple(out)
+def _reported_items(turns, items, kind: int) -> tuple:
+    """Stroboscopic samples (kind 1) or friction transitions (kind 2), as reported (Turns.items)."""
+    return tuple(items) if turns is None else turns.items(items, kind)
 
 
 #: propagate_until is called for at most this many steps at a time, to see
@@ -570,8 +559,8 @@ STEP_CHUNK = 1 << 16
 def _propagate(ta, log, t_end, dense=None, expand=None, optimized=None, wind=None, turns=None):
     """propagate_until with the cyclic GC off and Ctrl-C turned into a clean stop: (outcome, steps, ta).
 
-    In chunks of STEP_CHUNK steps: a chunk that leaves the time where it was
-    means heyoka is stuck (measured: g = 1e29 with a track-force event makes
+    In chunks of at most STEP_CHUNK steps: STEP_CHUNK steps in a row that leave
+    the time where it was mean heyoka is stuck (measured: g = 1e29 with a track-force event makes
     it take zero-length steps for ever); the run then stops, status failed.
     ``optimized(ta)``: for a quickly compiled integrator, the optimized one
     that takes over, in the same state, after QUICK_STEPS steps. ``wind``: a

@@ -141,6 +141,19 @@ class Turns:
             offset = change[3]
         return offset
 
+    def items(self, items, kind: int) -> tuple:
+        """Stroboscopic samples (t, full state; ``kind`` 1) or friction transitions (t, body, old, new, q, dq;
+        ``kind`` 2) as reported: the whole turns each was made with put back in its angles."""
+        out = []
+        for n, item in enumerate(items):
+            offset = self.offset_of(kind, n) if self.changes else 0
+            if offset and kind == 1:
+                item = (item[0], self.angles(item[1], len(item[1]) // 2, offset))
+            elif offset:
+                item = item[:4] + (item[4] + offset,) + item[5:]
+            out.append(item)
+        return tuple(out)
+
     def angles(self, state, n_bodies: int, offset=None) -> list:
         """A full state [phi..., dphi..., extra] as a list, the turns (``offset``, default: all so far) put back."""
         offset = self.offset if offset is None else offset
