@@ -65,8 +65,9 @@ def test_a_finite_ball_breaks_the_families_and_the_engine_closes_the_orbits():
 def test_the_cli_lists_orbits_and_refuses_bad_periods(tmp_path):
     path = write(tmp_path, TABLE)
     out = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "billiard", "orbits", str(path),
-                          "--period", "2", "--json"], capture_output=True, text=True)
+                          "--period", "2", "--json", "--progress", "on"], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
+    assert "orbits: 100%" in out.stderr  # a bar over the searches (a polygon's period 8 took 39 s with none)
     orbits = json.loads(out.stdout)
     assert [o["stability"] for o in orbits] == ["unstable", "stable"]
     bad = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "billiard", "orbits", str(path),
@@ -86,9 +87,10 @@ def test_the_birkhoff_portrait_of_a_circle_keeps_each_launch_at_one_angle(tmp_pa
         assert run["sin_angle"][0] == pytest.approx(run["p"], abs=1e-8)
     path = write(tmp_path, TABLE)
     out = subprocess.run([sys.executable, "-m", "heyroll.interfaces.cli", "billiard", "portrait", str(path),
-                          "--runs", "3", "--impacts", "20", "--out", str(tmp_path / "bp")], capture_output=True,
-                         text=True)
+                          "--runs", "3", "--impacts", "20", "--out", str(tmp_path / "bp"), "--progress", "on"],
+                         capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
+    assert "birkhoff: 100%" in out.stderr and "3/3" in out.stderr
     rows = (tmp_path / "bp" / "birkhoff_portrait.csv").read_text().splitlines()
     assert rows[0] == "run,theta,p,n,boundary_s,sin_reflection_angle" and len(rows) == 1 + 3 * 20
     assert (tmp_path / "bp" / "birkhoff_portrait.png").stat().st_size > 0

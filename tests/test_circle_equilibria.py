@@ -230,7 +230,9 @@ def test_cli_bad_body_on_a_circle_exits_2_with_one_line(tmp_path, capsys, comman
 def test_cli_portrait_on_a_circle(tmp_path, capsys, frame, count):
     path = circle_scene(tmp_path, frame)
     out = tmp_path / "p"
-    assert main(["portrait", str(path), "--out", str(out)]) == 0
+    assert main(["portrait", str(path), "--out", str(out), "--progress", "on"]) == 0
+    printed = capsys.readouterr()
+    assert "portrait: 100%" in printed.err
     assert {p.name for p in out.iterdir()} == {"portrait.png", "energy_surface.png", "bifurcation.png",
                                                "portrait.json"}
     assert all((out / f).stat().st_size > 0 for f in ("portrait.png", "energy_surface.png", "bifurcation.png"))
@@ -249,7 +251,7 @@ def test_cli_portrait_on_a_circle(tmp_path, capsys, frame, count):
     top = max(data["equilibria"], key=lambda e: e["potential_per_mass"])
     assert top["type"] == "saddle" and abs(abs(top["q"]) - math.pi) < 0.2
     assert top["potential_per_mass"] in data["separatrix_levels_per_mass"]
-    assert "phi = " in capsys.readouterr().out
+    assert "phi = " in printed.out
 
 
 def test_problem_of_a_circle_scene_uses_its_frame_and_gravity():

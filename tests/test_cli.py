@@ -138,14 +138,16 @@ def test_quad_run_writes_36_digit_round_trip_table(tmp_path):
         assert heyoka.real128(entry["dq"]) == result.final_state[nb + k]
 
 
-def test_validate_writes_a_report_with_every_section(tmp_path):
+def test_validate_writes_a_report_with_every_section(tmp_path, capsys):
     out = tmp_path / "val"
     out.mkdir()
     # acceptance test: an earlier run's table and summary stayed beside the report's figures of another run
     for name in ("collisions.csv", "summary.json", "lyapunov.png", "birkhoff_map.png"):
         (out / name).write_text("stale")
     (out / "notes.txt").write_text("mine")
-    assert main(["validate", "--out", str(out), "--collisions", "4"]) == 0
+    assert main(["validate", "--out", str(out), "--collisions", "4", "--progress", "on"]) == 0
+    # every long job shows progress: a bar over the report's sections (it took 20 s with none)
+    assert "validate: 100%" in capsys.readouterr().err
     assert (out / "notes.txt").read_text() == "mine"
     assert not any((out / name).exists() for name in ("collisions.csv", "summary.json", "birkhoff_map.png"))
     report = (out / "report.md").read_text()
@@ -382,6 +384,8 @@ def test_a_run_with_no_trajectory_to_draw_writes_its_summary_and_says_no_figures
     (a non-finite number is null, not NaN)."""
     import dataclasses
 
+    import heyroll.interfaces.portrait_figures  # noqa: F401  (imported now, they bind the real simulate:
+    import heyroll.interfaces.report  # noqa: F401  first imported under the patch, they kept it for later tests)
     import heyroll.simulation.driver as driver
 
     real = driver.simulate

@@ -60,11 +60,13 @@ class PeriodicOrbit:
                 "sin_reflection": [float(v) for v in self.sin_reflection]}
 
 
-def periodic_orbits(scene, period: int, rotation: int | None = None, ball: int = 1) -> list[PeriodicOrbit]:
+def periodic_orbits(scene, period: int, rotation: int | None = None, ball: int = 1,
+                    progress=None) -> list[PeriodicOrbit]:
     """Periodic orbits of ``period`` impacts and rotation number ``rotation/period`` for ball ``ball``.
 
     ``rotation`` None: 1 on a smooth table; on a polygon every rotation number (each orbit says its own: a
-    rectangle's orbits of period 6 have 3, see :func:`_polygon_orbits`)."""
+    rectangle's orbits of period 6 have 3, see :func:`_polygon_orbits`). ``progress``: called as
+    ``progress(done, total, stage)`` as the searches go (a polygon's side sequences, a smooth table's starts)."""
     if not isinstance(period, int) or period < 2:
         raise SceneError("--period", f"must be a whole number >= 2, got {period!r}")
     polygon = hasattr(scene.boundary, "centre_polygon")
@@ -77,18 +79,22 @@ def periodic_orbits(scene, period: int, rotation: int | None = None, ball: int =
     radius = scene.balls[ball - 1].body.radius
     if polygon:
         rotations = range(1, period // 2 + 1) if rotation is None else (rotation,)
-        found = [o for p in rotations for o in _polygon_orbits(scene, period, p, radius)]
+        found = [o for p in rotations for o in _polygon_orbits(scene, period, p, radius, progress)]
         return sorted(found, key=lambda o: (o.rotation, -o.perimeter))
     rotation = 1 if rotation is None else rotation
     curve = _Curve(scene.boundary, radius)
     found: list[np.ndarray] = []
     step = 2 * np.pi * rotation / period
-    for theta0 in np.linspace(0, 2 * np.pi / period, STARTS, endpoint=False):
+    for done, theta0 in enumerate(np.linspace(0, 2 * np.pi / period, STARTS, endpoint=False)):
+        if progress is not None:
+            progress(done, STARTS, f"{len(found)} found")
         thetas = _newton(curve, theta0 + step * np.arange(period))
         if thetas is None or not _rotates(thetas, rotation, period):
             continue
         if not any(_same_orbit(curve, thetas, other) for other in found):
             found.append(thetas)
+    if progress is not None:
+        progress(STARTS, STARTS, f"{len(found)} found")
     orbits = []
     for thetas in found:
         orbit = _describe(scene, curve, thetas, rotation, radius)
@@ -112,7 +118,7 @@ MAX_POLYGON_PERIOD = 8
 POLYGON_STARTS = 4
 
 
-def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicOrbit]:
+def _polygon_orbits(scene, period: int, rotation: int, radius, progress=None) -> list[PeriodicOrbit]:
     """The periodic orbits of a ball's centre in a polygonal table, by their sequences of sides.
 
     The perimeter of an inscribed n-gon is not smooth where a vertex passes a corner, so the search of
@@ -148,7 +154,9 @@ def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicO
                                      f"to search; take a shorter period")
     starts = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
     orbits = []
-    for code in codes:
+    for done, code in enumerate(codes):
+        if progress is not None:
+            progress(done, len(codes), f"rotation {rotation}: {len(orbits)} found")
         code = np.array(code)
 
         def perimeter_gradient(t):
@@ -185,6 +193,8 @@ def _polygon_orbits(scene, period: int, rotation: int, radius) -> list[PeriodicO
         orbits.append(PeriodicOrbit(period=period, rotation=rotation, points=points, thetas=thetas,
                                     perimeter=float(norms.sum()), sin_reflection=np.sum(u * tangents, axis=1),
                                     kind=kind, trace=trace, stability=_stability(trace)))
+    if progress is not None:
+        progress(len(codes), len(codes), f"rotation {rotation}: {len(orbits)} found")
     return sorted(orbits, key=lambda o: -o.perimeter)
 
 

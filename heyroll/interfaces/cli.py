@@ -103,6 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
     val.add_argument("scene", nargs="?", help="scene file (TOML); the built-in default scene if omitted")
     val.add_argument("--out", default="heyroll-validation", help="output directory (default: heyroll-validation)")
     val.add_argument("--collisions", default="20", help="collisions compared with the reference (default: 20)")
+    _add_progress(val, "the report's sections")
     eq = sub.add_parser("equilibria", help="relative equilibria of a body on its track, in a fixed or turning plane (centres, saddles)")
     eq.add_argument("scene", help="scene file (TOML): a circle, a curve y = f(x) or an arc chain")
     eq.add_argument("--json", action="store_true", help="print a JSON array of {x, type} sorted by x")
@@ -112,6 +113,7 @@ def build_parser() -> argparse.ArgumentParser:
     por.add_argument("--out", default="heyroll-portrait", help="output directory (default: heyroll-portrait)")
     por.add_argument("--body", default="1", help="which body (1..N; default 1)")
     por.add_argument("--omega-max", dest="omega_max", help="bifurcation diagram from 0 to this Omega (rad/s)")
+    _add_progress(por, "the portrait's pieces")
     bil = sub.add_parser("billiard", help="billiard tables (paper section 7): periodic orbits and their stability")
     bsub = bil.add_subparsers(dest="billiard_command", required=True, parser_class=_Parser)
     orb = bsub.add_parser("orbits", help="periodic orbits of a table scene's ball: perimeter, stability (trace)")
@@ -121,12 +123,14 @@ def build_parser() -> argparse.ArgumentParser:
                      help="rotation number p of p/period (default 1; on a polygonal table every p)")
     orb.add_argument("--ball", default="1", help="which ball's radius sets the curve of its centre (default 1)")
     orb.add_argument("--json", action="store_true", help="print a JSON array of orbits")
+    _add_progress(orb, "the orbit searches")
     bpo = bsub.add_parser("portrait", help="the Birkhoff map of many launches of one ball, coloured by launch")
     bpo.add_argument("scene", help="table scene file (TOML, track type = \"table\")")
     bpo.add_argument("--runs", default="12", help="launches (default 12), spread over the cushion and the angle")
     bpo.add_argument("--impacts", default="300", help="cushion impacts per launch (default 300)")
     bpo.add_argument("--ball", default="1", help="which ball (alone on the table; default 1)")
     bpo.add_argument("--out", default="heyroll-birkhoff", help="output directory (default: heyroll-birkhoff)")
+    _add_progress(bpo, "launches")
     _add_sweep_parsers(sub)
     show = sub.add_parser("default-scene", help="print the built-in default scene as TOML")
     show.set_defaults()
@@ -317,6 +321,37 @@ def _progress_bar(mode: str, scene, t_end):
         bar.close()
 
 
+@contextlib.contextmanager
+def _count_bar(mode: str, desc: str, unit: str):
+    """A tqdm bar over counted pieces of work (a report's sections, a portrait's launches, orbit searches),
+    or None (no bar). It yields ``progress(done, total, stage=None)``: the bar learns its total from the first
+    call, and ``stage`` names what comes next."""
+    import tqdm
+
+    disable = {"on": False, "off": True, "auto": None}[mode]  # tqdm: None = only on a terminal
+    bar = tqdm.tqdm(total=None, unit=unit, desc=desc, disable=disable, file=sys.stderr, miniters=1)
+    if bar.disable:
+        yield None
+        return
+
+    def progress(done, total, stage=None):
+        bar.total = total
+        bar.n = done
+        if stage is not None:
+            bar.set_postfix_str(stage, refresh=False)
+        bar.refresh()
+
+    try:
+        yield progress
+    finally:
+        bar.close()
+
+
+def _add_progress(parser, what: str) -> None:
+    parser.add_argument("--progress", choices=("auto", "on", "off"), default="auto",
+                        help=f"progress bar over {what} on stderr (auto: if a terminal)")
+
+
 def _sigterm_as_interrupt():
     """SIGTERM ends a run like Ctrl-C: the table up to the last collision, status interrupted."""
 
@@ -434,8 +469,8 @@ def _billiard_portrait(args) -> int:
     scene = _table_scene(args.scene, "portrait")
     out = _out_dir(args.out)
     _writable(out)
-    with _sigterm_as_interrupt():
-        launches = birkhoff_portrait(scene, runs, impacts, ball)
+    with _count_bar(args.progress, "birkhoff", "launch") as progress, _sigterm_as_interrupt():
+        launches = birkhoff_portrait(scene, runs, impacts, ball, progress=progress)
     lines = ["run,theta,p,n,boundary_s,sin_reflection_angle"]
     for k, run in enumerate(launches, start=1):
         lines += [f"{k},{run['theta']:.17g},{run['p']:.17g},{n},{s:.17g},{q:.17g}"
@@ -459,7 +494,8 @@ def _billiard_orbits(args) -> int:
     rotation = None if args.rotation is None else _collision_count(args.rotation, "--rotation")
     ball = _collision_count(args.ball, "--ball")
     scene = _table_scene(args.scene, "orbits")
-    orbits = periodic_orbits(scene, period, rotation, ball)
+    with _count_bar(args.progress, "orbits", "search") as progress, _sigterm_as_interrupt():
+        orbits = periodic_orbits(scene, period, rotation, ball, progress=progress)
     if args.json:
         print(json.dumps([o.as_dict() for o in orbits], indent=2))
         return EXIT_OK
@@ -510,7 +546,8 @@ def _portrait(args) -> int:
         omegas = np.linspace(0.0, top, 121)
     out = _out_dir(args.out)
     _writable(out)
-    data = write_portrait(scene, out, scene_source=args.scene, body=body, omegas=omegas)
+    with _count_bar(args.progress, "portrait", "piece") as progress, _sigterm_as_interrupt():
+        data = write_portrait(scene, out, scene_source=args.scene, body=body, omegas=omegas, progress=progress)
     for e in data["equilibria"]:
         print(f"{e['type']:>7} at x = {e['x']:.17g} ({data['coordinate']} = {e['q']:.17g})"
               + (f" to x = {e['x_end']:.17g}" if e.get("x_end") is not None else ""))
@@ -546,7 +583,9 @@ def _validate(args) -> int:
 
     prepare_run_directory(out)
     try:
-        path = validate(scene, out, source=args.scene or "<default scene>", collisions=collisions)
+        with _count_bar(args.progress, "validate", "section") as progress, _sigterm_as_interrupt():
+            path = validate(scene, out, source=args.scene or "<default scene>", collisions=collisions,
+                            progress=progress)
     except (OSError, KeyboardInterrupt) as exc:
         remove_run_files(out)  # a report is written last: its figures alone are not kept
         if isinstance(exc, KeyboardInterrupt):

@@ -37,14 +37,24 @@ def default_omegas(scene: Scene) -> np.ndarray:
     return np.linspace(0.0, 2 * max(om, 3.0), 121)
 
 
-def write_portrait(scene: Scene, out_dir: Path, *, scene_source: str, body: int = 0, omegas=None) -> dict:
+def write_portrait(scene: Scene, out_dir: Path, *, scene_source: str, body: int = 0, omegas=None,
+                   progress=None) -> dict:
+    """``progress``: called as ``progress(done, total, stage)`` before each figure and at the end."""
     from .portrait_figures import bifurcation_figure, energy_surface_figure, portrait_figure
+
+    def stage(done, name):
+        if progress is not None:
+            progress(done, 4, name)
 
     out_dir.mkdir(parents=True, exist_ok=True)
     omegas = default_omegas(scene) if omegas is None else omegas
+    stage(0, "phase portrait")
     check = portrait_figure(scene, out_dir / "portrait.png", body=body)
+    stage(1, "energy surface")
     energy_surface_figure(scene, out_dir / "energy_surface.png", body=body)
+    stage(2, "bifurcation diagram")
     bifurcation_figure(scene, out_dir / "bifurcation.png", omegas, body=body)
+    stage(3, "equilibria")
     problem = problem_of(scene, body)
     eq = find_equilibria(problem)
     bif = bifurcations(problem, omegas)
@@ -66,4 +76,5 @@ def write_portrait(scene: Scene, out_dir: Path, *, scene_source: str, body: int 
         "versions": versions(),
     }
     atomic_write_text(out_dir / "portrait.json", json.dumps(data, indent=2) + "\n")
+    stage(4, "done")
     return data

@@ -337,10 +337,12 @@ def sections_for(scene: Scene) -> list:
     return PATH_SECTIONS
 
 
-def validate(scene: Scene, out_dir: Path, *, source: str, collisions: int = 20, extra_sections=None) -> Path:
+def validate(scene: Scene, out_dir: Path, *, source: str, collisions: int = 20, extra_sections=None,
+             progress=None) -> Path:
     """Write ``out_dir/report.md`` and its figures; returns the report's path.
 
     ``extra_sections`` (circle): replaces the analysis sections (series error, paper method, horizon).
+    ``progress``: called as ``progress(done, total, stage)`` before each section and at the end.
     """
     out_dir.mkdir(parents=True, exist_ok=True)
     ctx = ReportContext(scene=scene, source=source, out_dir=out_dir, collisions=collisions)
@@ -348,8 +350,12 @@ def validate(scene: Scene, out_dir: Path, *, source: str, collisions: int = 20, 
     sections = sections_for(scene)
     if extra_sections is not None and scene.track.linear_gap:
         sections = SECTIONS + list(extra_sections)
-    for section in sections:
+    for done, section in enumerate(sections):
+        if progress is not None:
+            progress(done, len(sections), section.__name__.removeprefix("section_").replace("_", " "))
         body += section(ctx)
+    if progress is not None:
+        progress(len(sections), len(sections), "done")
     body += section_versions(ctx)
     header = [
         f"# heyroll validation report: {scene.name}",
