@@ -201,6 +201,26 @@ def test_impact_times_in_the_ellipse_against_the_mpmath_reference():
     assert worst < 4e-15
 
 
+@pytest.mark.parametrize("radius", ["0.1", "0.0001"])
+def test_a_small_ball_leaves_each_cushion_impact_in_the_ellipse_with_the_exact_reflection(radius):
+    """Review: the normal at a finite ball's cushion impact came from the foot point minus the centre (two points
+    ~a from the origin and R apart): with R = 1e-4 in a = 2 each impact's outgoing velocity was 3e-12 off. From
+    each row's incoming state the reference finds the impact and mirrors the velocity in its exact normal."""
+    scene = table_scene(ELLIPSE, [ball("0.6", "-0.2", "1.0", "0.7", radius=radius, mass="1")], t_end=1e4,
+                        max_collisions=40)
+    table = simulate(scene).collision_table()
+    with mpmath.workdps(40):
+        worst = 0.0
+        for prev, row in zip(table[:-1], table[1:]):
+            state = [mpmath.mpf(float(prev[c])) for c in ("x_i", "y_i", "vx_i_after", "vy_i_after")]
+            _tau, (nx, ny) = _cushion_time(scene.boundary, state, mpmath.mpf(radius), mpmath.mpf(10) ** -30)
+            vx, vy = state[2], state[3]
+            vn = vx * nx + vy * ny
+            exact = (vx - 2 * vn * nx, vy - 2 * vn * ny)
+            worst = max(worst, max(abs(float(row[c] - e)) for c, e in zip(("vx_i_after", "vy_i_after"), exact)))
+    assert worst < 2e-15
+
+
 def test_two_balls_against_the_reference_for_the_first_impacts():
     scene = table_scene(ELLIPSE, [ball("0.3", "-0.2", "1.0", "0.7"), ball("-0.5", "0.2", "-0.3", "0.5")],
                         t_end=100, max_collisions=12)

@@ -294,8 +294,9 @@ def test_a_grazing_ball_a_press_holds_on_the_cushion_settles_onto_it(text, t_sto
     result = simulate(scene)
     assert result.status is Status.COMPLETED, result.message  # was: failed, "too slow to resolve its next impact"
     table = result.collision_table()
-    # (the instant moves by ~1e-10 s with t_end: heyoka's steps) it ends with the ball settled onto its cushion
-    near = table[abs(table["t"] - t_stop) < 1e-8]
+    # (the instant moves by ~1e-10 s with t_end: heyoka's steps, and by ~1e-7 s with the last bits of a cushion's
+    # normal: settling is decided below the contact resolution) it ends with the ball settled onto its cushion
+    near = table[abs(table["t"] - t_stop) < 1e-6]
     assert len(near)
     last = table[table["t"] == near["t"][0]][-1]
     assert (int(last["i"]), int(last["j"]), int(last["law_flag"])) == (k, 0, SETTLED)
