@@ -680,3 +680,18 @@ def test_a_rack_written_as_doubles_starts_touching_in_quad(policy):
     same = len(double) if policy == "impulses" else 1
     assert list(quad["i"][:same]) == list(double["i"][:same]) and list(quad["j"][:same]) == list(double["j"][:same])
     assert [float(t) for t in quad["t"][:same]] == pytest.approx(list(double["t"][:same]), rel=1e-12)
+
+
+@pytest.mark.parametrize("spin, body, says", [("wy = 2.0", "kappa = 1.0\nradius = 0.1", "bodies[2].wy"),
+                                              ("wx = 1.0", "kappa = 1.0\nradius = 0.1", "bodies[2].wx"),
+                                              ("wy = 1.0", 'shape = "particle"', "bodies[2].wy")])
+def test_a_spin_given_to_a_body_without_one_names_the_component_given(spin, body, says):
+    """Acceptance test: a kappa = 1 ball (or a particle) given wy alone was refused naming bodies[2].wx."""
+    from heyroll.errors import SceneError
+
+    text = (f'[track]\ntype = "table"\nboundary = "circle"\nradius = 1.0\n[[bodies]]\nshape = "particle"\nmass = 1.0\n'
+            f'x = 0.2\ny = 0.1\nvx = 0.7\nvy = 0.5\n[[bodies]]\n{body}\nmass = 1.0\nx = -0.3\ny = -0.2\nvx = 0.3\n'
+            f'vy = -0.9\n{spin}\n')
+    with pytest.raises(SceneError) as error:
+        parse_scene(text)
+    assert error.value.field == says

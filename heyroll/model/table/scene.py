@@ -43,10 +43,14 @@ class TableBall:
             values[name] = to_mpf(value)
         ux = uy = mpmath.mpf(0)
         if spin is not None:
+            # the component given (a scene with wy alone was told about its wx: acceptance test)
+            given = "wy" if to_mpf(spin[0]) == 0 and to_mpf(spin[1]) != 0 else "wx"
             if body.is_particle:
-                raise SceneError(f"{field}.wx", "a particle has no spin (it is the point of the mathematical billiard)")
+                raise SceneError(f"{field}.{given}", "a particle has no spin (it is the point of the mathematical "
+                                                     "billiard)")
             if body.kappa == 1:
-                raise SceneError(f"{field}.wx", "a body with kappa = 1 has no rotational inertia: it has no spin to give")
+                raise SceneError(f"{field}.{given}", "a body with kappa = 1 has no rotational inertia: it has no spin "
+                                                     "to give")
             wx, wy = (to_mpf(w) for w in spin)
             with workprec():  # u = v - R omega x z, omega x z = (wy, -wx)
                 ux = values["vx"] - body.radius * wy
