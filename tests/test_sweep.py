@@ -734,3 +734,20 @@ def test_figures_of_invalid_points_say_so(tmp_path, monkeypatch):
     paths = figures.sweep_figures(out / "sweep.zarr", out)
     assert [p.name for p in paths] == ["bifurcation.png"] and paths[0].exists()
     assert titles and all(", 2 invalid" in t for t in titles) and notes == [0]
+
+
+def test_a_map_of_points_that_ran_without_a_value_says_so(tmp_path, monkeypatch):
+    """Review: every point of a rough track's sweep completed, its Lyapunov exponent not estimated (NaN): the map
+    said "4 invalid or not run" over a colour bar of nothing. Now it tells points that ran with no value apart."""
+    from heyroll.sweep import figures
+
+    out = tmp_path / "rough"
+    scene = Path(__file__).parent.parent / "examples" / "rough_parabola_forced.toml"
+    assert main(["sweep", str(scene), "--vary", "forcing.amplitude=1:2:2", "--vary", "forcing.frequency=1:2:2",
+                 "--keep", "lyapunov", "--t-end", "0.5", "--workers", "1", "--out", str(out), "--progress", "off",
+                 "--no-figures"]) == 0
+    titles = []
+    monkeypatch.setattr(figures, "_title", lambda ax, text, fontsize=12: titles.append(text))
+    paths = figures.sweep_figures(out / "sweep.zarr", out, scalar="lyapunov")
+    assert [p.name for p in paths] == ["map_lyapunov.png"]
+    assert titles == [titles[0]] and titles[0].endswith("; 4 ran with no value (blank)") and "invalid" not in titles[0]

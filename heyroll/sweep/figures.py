@@ -215,20 +215,31 @@ def _map(ds, keys: list, name: str, path: Path, title: str) -> Path:
 
     values, label = SCALARS[name]
     z = values(ds)
+    status = ds["status"]
     fig, ax = plt.subplots(figsize=(7, 5.5), constrained_layout=True)
     if "point" in ds.dims:
         art = ax.scatter(ds[keys[0]].values, ds[keys[1]].values, c=np.asarray(z.values, dtype=float), s=12,
                          cmap="viridis")
     else:
-        z = z.transpose(keys[1], keys[0])
+        z, status = z.transpose(keys[1], keys[0]), status.transpose(keys[1], keys[0])
         art = ax.pcolormesh(ds[keys[0]].values, ds[keys[1]].values, np.ma.masked_invalid(np.asarray(z.values, float)),
                             shading="nearest", cmap="viridis")
-    fig.colorbar(art, ax=ax, label=label)
+    blank = np.isnan(np.asarray(z.values, dtype=float))
+    if blank.all():  # (a colour bar of nothing read -0.1..0.1)
+        ax.text(0.5, 0.5, f"no point has a value of {name}: see the title", transform=ax.transAxes,
+                ha="center", va="center", color="0.4")
+    else:
+        fig.colorbar(art, ax=ax, label=label)
     ax.set_xlabel(_label(ds, keys[0]))
     ax.set_ylabel(_label(ds, keys[1]))
-    missing = int(np.isnan(np.asarray(z.values, dtype=float)).sum())
-    _title(ax, f"{title}" + (f"; {missing} invalid or not run" + ("" if "point" in ds.dims else " (blank)")
-                             if missing else ""))
+    # a blank point is one that did not run (invalid scene, not yet run) or one that ran with no value (no period
+    # found, no Lyapunov estimate on its track: every point of a rough track was called "invalid or not run", review)
+    statuses = np.asarray(status.values)
+    failed = int((blank & ((statuses == "invalid_scene") | (statuses == ""))).sum())
+    valueless = int(blank.sum()) - failed
+    notes = ([f"{failed} invalid or not run"] if failed else []) + ([f"{valueless} ran with no value"] if valueless
+                                                                    else [])
+    _title(ax, f"{title}" + (f"; {', '.join(notes)}" + ("" if "point" in ds.dims else " (blank)") if notes else ""))
     return _save(fig, path)
 
 
