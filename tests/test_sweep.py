@@ -308,6 +308,21 @@ def test_an_unreachable_scheduler_is_one_line_exit_2(tmp_path, capsys, monkeypat
     assert not out.exists()
 
 
+def test_a_scheduler_with_no_worker_is_one_line_exit_2(tmp_path, capsys, monkeypatch):
+    """Review: a reachable scheduler with no worker took the tasks and ran none; the sweep waited in silence."""
+    from distributed import LocalCluster
+
+    monkeypatch.setattr(sweep_run, "WORKER_WAIT", 1)
+    out = tmp_path / "out"
+    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+        code = main(["sweep", "--vary", "g=9:10:2", "--scheduler", cluster.scheduler_address, "--out", str(out),
+                     "--progress", "off"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert err.count("\n") == 1 and "has no worker" in err and "dask worker" in err
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("answer", [b"SSH-2.0-OpenSSH_9.6\r\nHTTP/1.1 400 Bad Request\r\n\r\n", None],
                          ids=["a_banner", "silence"])
 def test_a_service_that_is_not_a_scheduler_is_one_line_exit_2(tmp_path, capsys, monkeypatch, answer):

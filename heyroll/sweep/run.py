@@ -32,6 +32,8 @@ from .store import SPEC_ATTR, ChunkWriter, check_spec, open_or_create, open_swee
 
 #: Seconds to wait for a --scheduler to answer before giving up (one line, exit 2).
 SCHEDULER_TIMEOUT = 10
+#: Seconds a scheduler is given to have a worker before the sweep is refused.
+WORKER_WAIT = 30
 
 
 @dataclass(frozen=True)
@@ -257,6 +259,12 @@ def _connect(client_class, address: str):
             detail = f"what answers there is not a dask scheduler ({exc.__class__.__name__})"
         raise SchedulerError("--scheduler", f"cannot reach the dask scheduler at {address}: {detail}")
     with made["client"] as client:
+        # a scheduler with no worker takes the tasks and runs none: the sweep waited in silence (review)
+        try:
+            client.wait_for_workers(1, timeout=WORKER_WAIT)
+        except TimeoutError:
+            raise SchedulerError("--scheduler", f"the dask scheduler at {address} has no worker (none joined within "
+                                                f"{WORKER_WAIT} s): start one with 'dask worker {address}'") from None
         yield client
 
 
