@@ -124,10 +124,14 @@ class NormalImpulseLaw:
     def one_dimensional(self):
         raise NotImplementedError
 
-    def constants(self, body_i, body_j, number) -> tuple:
+    def impulse_map(self, body_i, body_j):
+        """The pair's map at model precision (heyroll.model.laws.ImpulseMap)."""
         from ...laws import impulse_map
 
-        m = impulse_map(self.one_dimensional(), body_i, body_j, 1, 1)
+        return impulse_map(self.one_dimensional(), body_i, body_j, 1, 1)
+
+    def constants(self, body_i, body_j, number) -> tuple:
+        m = self.impulse_map(body_i, body_j)
         return number(m.q), number(m.a_i), number(m.a_j)
 
     def normal_rates(self, c, vn_i, vn_j):
