@@ -231,6 +231,7 @@ def _scene_at(scene: Scene, state, t_end, elapsed=0) -> Scene:
         limiter_restitution=scene.limiter_restitution,
         static_friction=scene.static_friction,
         forcing=forcing,
+        simultaneous=scene.simultaneous,
     )
 
 

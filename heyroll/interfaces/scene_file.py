@@ -49,7 +49,7 @@ BODY_KEYS = BODY_SHAPE_KEYS | {"phi", "dphi", "omega"}
 #: angle on it: phi on concave arcs, psi on convex ones, distance on lines).
 PATH_BODY_KEYS = {"curve": BODY_SHAPE_KEYS | {"x", "dx"}, "parametric": BODY_SHAPE_KEYS | {"u", "du"},
                   "arcs": BODY_SHAPE_KEYS | {"s", "ds", "segment", "angle", "dangle"}}
-COLLISION_KEYS = {"law", "restitution", "on_inconsistent"}
+COLLISION_KEYS = {"law", "restitution", "on_inconsistent", "simultaneous"}
 RUN_KEYS = {"t_end", "max_collisions"}
 
 
@@ -118,7 +118,7 @@ def scene_from_dict(data: dict, *, default_name: str = "scene") -> Scene:
     return Scene.make(
         track, bodies, phis, dphis, law=law, g=g, run=settings, name=name,
         friction=friction, on_inconsistent=policy, track_sides=sides, frame=frame,
-        **_rough(data, track_table, bodies_data),
+        simultaneous=_simultaneous(data), **_rough(data, track_table, bodies_data),
     )
 
 
@@ -217,6 +217,7 @@ def _path_scene(data: dict, track_table: dict, name: str, g) -> Scene:
     return Scene.make(track, bodies, qs, dqs, law=law,
                       limiter_restitution=_number(track_table, "limiter_restitution", "track"),
                       frame=frame, g=g, run=settings, name=name, on_inconsistent=policy,
+                      simultaneous=_simultaneous(data),
                       track_sides=_sides(track_table), friction=_number(track_table, "friction", "track"),
                       **_rough(data, track_table, bodies_data))
 
@@ -226,6 +227,14 @@ def _sides(table: dict) -> str:
     if not isinstance(sides, str):
         raise SceneError("track.sides", "must be a string: one | two")
     return sides
+
+
+def _simultaneous(data: dict) -> str:
+    """[collision] simultaneous: "sequential" (default) | "impulses" (checked by Scene.make)."""
+    value = _table(data, "collision", required=False).get("simultaneous", "sequential")
+    if not isinstance(value, str):
+        raise SceneError("collision.simultaneous", "must be a string: sequential | impulses")
+    return value
 
 
 def _collision_and_run(data: dict):

@@ -32,6 +32,8 @@ STANDARD_GRAVITY = "9.81"
 #: position (they would overlap): fall back to Newton's law on the gap rate
 #: with generalized masses for that collision, or stop the run.
 INCONSISTENCY_POLICIES = ("newton", "error")
+#: How contacts touching at one instant are resolved on the circle (see Scene.simultaneous).
+SIMULTANEOUS_POLICIES = ("sequential", "impulses")
 
 
 @dataclass(frozen=True)
@@ -156,6 +158,9 @@ class Scene:
     slip: tuple = ()
     #: Periodic forcing (a force along the track or a motion of the track), or None.
     forcing: Forcing | None = None
+    #: Contacts touching at one instant on the circle: "sequential" (pair by pair, contact_settler) or
+    #: "impulses" (all at once: a linear complementarity problem, as the table's).
+    simultaneous: str = "sequential"
     pairs: tuple[ContactPair, ...] = field(default=(), compare=False)
 
     @classmethod
@@ -180,6 +185,7 @@ class Scene:
         static_friction: Real | None = None,
         slip=None,
         forcing: Forcing | None = None,
+        simultaneous: str = "sequential",
     ) -> "Scene":
         """``q``/``dq`` (or, on a circle, their names ``phi``/``dphi``): one per body."""
         q = phi if q is None else q
@@ -217,6 +223,12 @@ class Scene:
                 "collision.on_inconsistent",
                 f"unknown policy {on_inconsistent!r}; expected one of {' | '.join(INCONSISTENCY_POLICIES)}",
             )
+        if simultaneous not in SIMULTANEOUS_POLICIES:
+            raise SceneError("collision.simultaneous",
+                             f"unknown policy {simultaneous!r}; expected one of {' | '.join(SIMULTANEOUS_POLICIES)}")
+        if simultaneous == "impulses" and not track.linear_gap:
+            raise SceneError("collision.simultaneous",
+                             "'impulses' is offered on the circle (and on tables), not on path tracks: use 'sequential'")
         if track_sides not in ("one", "two"):
             raise SceneError("track.sides", f"must be 'one' or 'two', got {track_sides!r}")
         k_lim = law.restitution if limiter_restitution is None else limiter_restitution
@@ -228,6 +240,7 @@ class Scene:
             g=gv, track=track, bodies=bodies, q=qs, dq=dqs, law=law, run=run or RunSettings.make(), name=name,
             track_friction=mu, on_inconsistent=on_inconsistent, track_sides=track_sides, frame=frame,
             limiter_restitution=k_lim, static_friction=mu_s, slip=slips, forcing=forcing,
+            simultaneous=simultaneous,
         )
         return scene._with_checked_state()
 
@@ -249,7 +262,8 @@ class Scene:
         scene = Scene(g=self.g, track=self.track, bodies=self.bodies, q=qs, dq=dqs, law=self.law, run=self.run,
                       name=self.name, track_friction=self.track_friction, on_inconsistent=self.on_inconsistent,
                       track_sides=self.track_sides, frame=self.frame, limiter_restitution=self.limiter_restitution,
-                      static_friction=self.static_friction, slip=slips, forcing=self.forcing)
+                      static_friction=self.static_friction, slip=slips, forcing=self.forcing,
+                      simultaneous=self.simultaneous)
         object.__setattr__(scene, "_constants", self.constants)
         own = self.__dict__.get("_circle_energies")
         if own:  # the energies of the bodies whose state is unchanged (a sweep varies one or two)
@@ -603,7 +617,7 @@ def _slips(slip, bodies, mu) -> tuple:
 
 #: The fields of a scene that are not its state, name or run settings (Scene.constants).
 _CONSTANT_FIELDS = ("g", "track", "bodies", "law", "track_friction", "on_inconsistent", "track_sides", "frame",
-                    "limiter_restitution", "static_friction", "forcing")
+                    "limiter_restitution", "static_friction", "forcing", "simultaneous")
 
 
 class SceneConstants:

@@ -270,6 +270,7 @@ def _result(point: _Point, ta, index: int, outcome, t_end: float, options) -> Si
                   "t_end": float(t_end), "max_collisions": limit, "max_events": log.max_events,
                   "on_inconsistent": scene.on_inconsistent, "inconsistent_collisions": log.fallbacks,
                   "track_sides": scene.track_sides,
+                  **({"simultaneous": scene.simultaneous} if scene.simultaneous != "sequential" else {}),
                   "warnings": [log.warnings[k] for k in sorted(log.warnings)] + law_caveats(scene),
                   "batch": f"batch of {ta.batch_size} (heyoka SIMD)"},
         total_collisions=log.count, passage_counts=(0, 0),

@@ -506,6 +506,7 @@ def _run(scene: Scene, opts: RunOptions, sink, progress, log: CollisionLog) -> S
             # (with on_inconsistent = "error" the one that stopped the run counts too: it was 0 there)
             "inconsistent_collisions": log.fallbacks + (status is Status.INCONSISTENT),
             "track_sides": scene.track_sides,
+            **({"simultaneous": scene.simultaneous} if scene.simultaneous != "sequential" else {}),
             "warnings": [log.warnings[k] for k in sorted(log.warnings)] + law_caveats(scene),
         },
         passages=tuple(log.passages) if stream.kept_passages is None else stream.kept_passages,

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..model.laws import GeneralizedNewtonLaw, ImpulseMap, impulse_map
 from ..model._numbers import DEKKER_SPLIT, TOUCHING_SLACK, halves, workprec
+from .resolve.complementarity import complementarity
 from .resolve.friction import slipping, slipping_law, slipping_members
 from .compiled_cache import by_constants
 from .system import SceneSystem, overlap_tolerance, unit_acceleration, unit_jerk
@@ -196,12 +197,15 @@ def mode_handlers(
     # The (double-length) time of each contact's last collision, or of the mode's start (the
     # driver sets it): where its gap was last known at zero or above (reopening_check).
     touched = settle.touched = [(0.0, 0.0)] * len(system.contacts)
+    # collision.simultaneous = "impulses": contacts touching at the fired one's instant resolved at once
+    group = simultaneous_resolver(scene, system, log) if scene.simultaneous == "impulses" and system.n_units > 2 \
+        else None
     for number in range(len(system.contacts)):
         if fast:
-            handler = _make_callback(scene, system, number, log, holder, time_scale, cascade, touched, settle)
+            handler = _make_callback(scene, system, number, log, holder, time_scale, cascade, touched, settle, group)
             resolvers.append(lambda s, t, resolve=handler.resolve: resolve(s, s.tolist(), t))
         else:
-            handler = _make_unit_callback(scene, system, number, log, holder, time_scale, settle, touched)
+            handler = _make_unit_callback(scene, system, number, log, holder, time_scale, settle, touched, group)
             resolvers.append(handler.resolve)
         handlers.append(handler)
     return _with_friction(scene, system, log, holder, friction, time_scale,
@@ -765,7 +769,7 @@ def _slipping_map(scene, system, i, j, holder) -> WorkingMap:
 
 
 def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float,
-                   cascade=None, touched=None, settle=None):
+                   cascade=None, touched=None, settle=None, group=None):
     """The hot path: every body free, the state is [phi_1..phi_N, dphi_1..dphi_N].
 
     Returns the event callback; its ``resolve(s, before, t)`` applies the law
@@ -848,7 +852,10 @@ def _make_callback(scene, system: SceneSystem, number: int, log: CollisionLog, h
         before = s.tolist()  # Python numbers: faster arithmetic than numpy scalars
         t, t_lo = ta.dtime
         touched[number] = (t, t_lo)
-        if not resolve(s, before, t):
+        if group is None or (done := group(s, t, number)) is None:  # (group: simultaneous_resolver)
+            if not resolve(s, before, t):
+                return False
+        elif not done:
             return False
         # This pair's event is in heyoka's cooldown: the settler leaves its gap alone.
         if cascade is not None and not cascade(s, t, (i, j), number):
@@ -1132,8 +1139,147 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
     return settle
 
 
+def simultaneous_resolver(scene, system: SceneSystem, log: CollisionLog):
+    """``group(s, t, number) -> None | bool``: collision.simultaneous = "impulses" on the circle.
+
+    Before contact ``number`` (whose event just fired) is resolved alone, the contacts that touch at
+    this instant and share a unit with it (and, transitively, with those: a chain of touching units)
+    are gathered; a contact within the settler's band (RESOLUTION_ULPS) of zero touches. None: no
+    other contact touches, or the group could not be resolved at once (then the instant is resolved
+    sequentially, as without the key). Otherwise every contact of the group is resolved at once
+    and True returned (False: the run stops at max_collisions).
+
+    Each contact's law is a linear pair map (:class:`WorkingMap`; the unit map where a cluster takes
+    part): D = v_a - q v_b, v_a+ = v_a - a_i D, v_b+ = v_b + a_j D, a_i + q a_j = 1 + k. An impulse P
+    (in units of D) moves v_a by -alpha P and v_b by +beta P, alpha = a_i / (1 + k), beta = a_j / (1 + k),
+    so D by -P: one contact alone, P = (1 + k) D, is exactly the law. For the group, P >= 0 with the
+    separations s = -D: s+ >= k D- where the contact approached (D- > 0), s+ >= 0 elsewhere,
+    complementary to P (resolve.complementarity: the Delassus matrix here is a symmetric positive
+    semi-definite one scaled by positive diagonals, which has the same solutions). Checked as the
+    table's: no contact of the group may be left closing beyond SEPARATION_ULPS, and the group's
+    kinetic energy (sum 1/2 M psi'^2, M a unit's generalized mass) may not grow beyond 2^20 ulps;
+    else None (sequential). Rows: one per contact with P > 0, in contact order, flag 2; the first
+    carries the whole change (before: the state before the group, after: after it), the others have
+    before = after. Rough tracks (slipping bodies change the laws' masses) are left sequential.
+    """
+    nu = system.n_units
+    eps = system.precision.epsilon
+    number_type = system.precision.number
+    zero = number_type(0)
+    double = system.precision.name == "double"
+    clusters = any(u.is_cluster for u in system.units)
+    contacts = system.contacts
+    geometry = [(c.unit_a, c.unit_b, system.gap_constants[n]) for n, c in enumerate(contacts)]
+    by_unit: dict[int, list[int]] = {}
+    for n, (a, b, _) in enumerate(geometry):
+        by_unit.setdefault(a, []).append(n)
+        by_unit.setdefault(b, []).append(n)
+    masses = [number_type(system._unit_floats[u][2]) for u in range(nu)]
+    maps: dict[int, tuple] = {}
+    records = log.records
+
+    def constants(n):
+        """(q, alpha, beta) of contact n in the run's type (double: Python floats), or None."""
+        if n not in maps:
+            c = contacts[n]
+            if system.units[c.unit_a].is_cluster or system.units[c.unit_b].is_cluster:
+                wm = working_map(unit_map(system, c.unit_a, c.unit_b, scene.law.restitution), system.precision)
+            else:
+                wm = pair_maps(scene, system.precision)[c.pair_index][0]
+            if wm is None:
+                maps[n] = None
+            else:
+                q, a_i, a_j = ((x[0] + x[1]) for x in (wm.q, wm.a_i, wm.a_j)) if double else (wm.q, wm.a_i, wm.a_j)
+                one_plus_k = a_i + q * a_j
+                maps[n] = (q, a_i / one_plus_k, a_j / one_plus_k, one_plus_k - 1)
+        return maps[n]
+
+    def group(s, t, number):
+        if system.friction_blocks:
+            return None
+        x = s.tolist()
+        members = [number]
+        found = {number}
+        pending = [geometry[number][0], geometry[number][1]]
+        units = set(pending)
+        while pending:
+            for n in by_unit.get(pending.pop(), ()):
+                if n in found:
+                    continue
+                a, b, constant = geometry[n]
+                pa, pb = x[a], x[b]
+                if abs(pb - pa + constant) <= RESOLUTION_ULPS * eps * (1 + abs(pa) + abs(pb)):
+                    found.add(n)
+                    members.append(n)
+                    for u in (a, b):
+                        if u not in units:
+                            units.add(u)
+                            pending.append(u)
+        if len(members) == 1:
+            return None
+        members.sort()
+        laws = [constants(n) for n in members]
+        if any(law is None for law in laws):
+            return None
+        v = {u: x[nu + u] for u in units}
+        m = len(members)
+        # A[c][d] = -dD_c/dP_d, b_c = s_c- - target_c
+        a_matrix = [[zero] * m for _ in range(m)]
+        rhs = []
+        for p, (n, (q, alpha, beta, k)) in enumerate(zip(members, laws)):
+            a, b, _ = geometry[n]
+            d = v[a] - q * v[b]
+            rhs.append(-d - k * d if d > zero else -d)
+            for r, (nd, (_, alpha_d, beta_d, _)) in enumerate(zip(members, laws)):
+                ad, bd, _ = geometry[nd]
+                change = zero  # dD_c / dP_d
+                if ad == a:
+                    change = change - alpha_d
+                if bd == a:
+                    change = change + beta_d
+                if ad == b:
+                    change = change + q * alpha_d
+                if bd == b:
+                    change = change - q * beta_d
+                a_matrix[p][r] = -change
+        impulses = complementarity(a_matrix, rhs, zero)
+        if impulses is None or not any(P > zero for P in impulses):
+            return None
+        new = dict(v)
+        for n, (q, alpha, beta, k), P in zip(members, laws, impulses):
+            if P > zero:
+                a, b, _ = geometry[n]
+                new[a] = new[a] - alpha * P
+                new[b] = new[b] + beta * P
+        for n in members:
+            a, b, _ = geometry[n]
+            va, vb = new[a], new[b]
+            if vb - va < -SEPARATION_ULPS * eps * (abs(va) + abs(vb)):
+                return None
+        energy_before = sum((masses[u] * v[u] * v[u] for u in units), zero)
+        energy_after = sum((masses[u] * new[u] * new[u] for u in units), zero)
+        if energy_after > energy_before * (1 + number_type(2.0 ** 20 * eps)):
+            return None
+        before = system.expand(x) if clusters else x
+        for u in units:
+            s[nu + u] = new[u]
+        after = system.expand(s.tolist()) if clusters else s.tolist()
+        limit = log.max_collisions
+        first = True
+        for n, P in zip(members, impulses):
+            if not P > zero:
+                continue
+            records.append((t, contacts[n].pair_index, before if first else after, None, after, 2))
+            first = False
+            if limit is not None and log.count >= limit:
+                return stop_at_max_collisions(log.stop, limit)
+        return True
+
+    return group
+
+
 def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionLog, holder: list, time_scale: float,
-                        settle=None, touched=None):
+                        settle=None, touched=None, group=None):
     """Collisions when some bodies move as clusters: the state holds unit coordinates.
 
     Two free bodies collide by the scene's law (and policy); a collision that
@@ -1198,7 +1344,10 @@ def _make_unit_callback(scene, system: SceneSystem, number: int, log: CollisionL
         s = holder[0]
         t, t_lo = ta.dtime
         touched[number] = (t, t_lo)
-        if not resolve(s, t):
+        if group is None or (done := group(s, t, number)) is None:  # (group: simultaneous_resolver)
+            if not resolve(s, t):
+                return False
+        elif not done:
             return False
         if settle is not None:
             if not settle(s, t, (a, b), number):

@@ -22,7 +22,6 @@ that touch at the same instant to the scene's simultaneity policy:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from itertools import combinations
 
 from ...model.table import TableScene
 from ...model.table.laws import after_impact, with_normal
@@ -31,6 +30,7 @@ from ...model.table.laws.base import NormalImpulseLaw, RestitutionLaw
 from ...model.table.laws.ball_ball.newton import NewtonTableLaw
 from ..events import working_map
 from ..precision import Precision
+from ..resolve.complementarity import MAX_SIMULTANEOUS, GAUSS_SEIDEL_SWEEPS, complementarity as _complementarity  # noqa: F401
 from .contacts import Contact
 from .system import STATE_PER_BALL
 
@@ -39,11 +39,6 @@ from .system import STATE_PER_BALL
 #: the impulse went through the centres (Newton's law with the masses), the spins were kept, 4 the ball settled
 #: onto a curved cushion (k < 1: the limit of its accumulating impacts, normal speed removed) and rides it.
 SCENE_LAW, FALLBACK_LAW, SIMULTANEOUS, SLIDING_BALL, SETTLED = 0, 1, 2, 3, 4
-#: Contacts whose active set 'impulses' searches over all subsets (2^m of them); more go to projected
-#: Gauss-Seidel (a rack of 15 balls touching: 30 contacts).
-MAX_SIMULTANEOUS = 8
-#: Sweeps of projected Gauss-Seidel at most.
-GAUSS_SEIDEL_SWEEPS = 100_000
 
 
 @dataclass(frozen=True)
@@ -225,75 +220,3 @@ class Resolver:
                     state[base + 4] = state[base + 4] + dvx
                     state[base + 5] = state[base + 5] + dvy
         return impulses
-
-
-def _complementarity(a, b, zero):
-    """L >= 0 with w = A L + b >= 0 and L . w = 0 (A symmetric PSD): exactly, by trying active sets
-    smallest first, for up to MAX_SIMULTANEOUS contacts; beyond, by projected Gauss-Seidel sweeps."""
-    m = len(b)
-    if all(x >= zero for x in b):
-        return [zero] * m
-    if m > MAX_SIMULTANEOUS:
-        return _gauss_seidel(a, b, zero)
-    slack = max(abs(x) for x in b) * 1e-12 if m else zero
-    for size in range(1, m + 1):
-        for subset in combinations(range(m), size):
-            lam_s = _solve([[a[p][q] for q in subset] for p in subset], [-b[p] for p in subset])
-            if lam_s is None or any(x < -slack for x in lam_s):
-                continue
-            lam = [zero] * m
-            for p, x in zip(subset, lam_s):
-                lam[p] = x if x > zero else zero
-            w = [sum((a[p][q] * lam[q] for q in range(m)), zero) + b[p] for p in range(m)]
-            if all(w[p] >= -slack for p in range(m) if p not in subset):
-                return lam
-    return None
-
-
-def _solve(matrix, rhs):
-    """Gaussian elimination with partial pivoting in the entries' own type; None if singular."""
-    n = len(rhs)
-    m = [row[:] + [r] for row, r in zip(matrix, rhs)]
-    scale = max((abs(x) for row in matrix for x in row), default=0)
-    for col in range(n):
-        pivot = max(range(col, n), key=lambda r: abs(m[r][col]))
-        if not abs(m[pivot][col]) > scale * 1e-12:
-            return None
-        m[col], m[pivot] = m[pivot], m[col]
-        for r in range(col + 1, n):
-            f = m[r][col] / m[col][col]
-            for c in range(col, n + 1):
-                m[r][c] = m[r][c] - f * m[col][c]
-    x = [None] * n
-    for r in range(n - 1, -1, -1):
-        total = m[r][n]
-        for c in range(r + 1, n):
-            total = total - m[r][c] * x[c]
-        x[r] = total / m[r][r]
-    return x
-
-
-def _gauss_seidel(a, b, zero):
-    """Projected Gauss-Seidel for the complementarity problem: converges for a symmetric PSD A with
-    positive diagonal; stops when a sweep changes no impulse by more than 1e-14 of the largest."""
-    m = len(b)
-    lam = [zero] * m
-    for _ in range(GAUSS_SEIDEL_SWEEPS):
-        change = zero
-        for p in range(m):
-            if not a[p][p] > zero:
-                continue
-            w = b[p]
-            for q in range(m):
-                w = w + a[p][q] * lam[q]
-            new = lam[p] - w / a[p][p]
-            if new < zero:
-                new = zero
-            step = abs(new - lam[p])
-            if step > change:
-                change = step
-            lam[p] = new
-        largest = max(lam)
-        if not change > largest * 1e-14:
-            return lam
-    return None
