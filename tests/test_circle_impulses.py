@@ -170,3 +170,14 @@ def test_pair_by_pair_the_odd_mirror_start_loses_its_symmetry():
     result = heyroll.simulate(mirror_unequal(5, "sequential"))
     final = np.asarray(result.final_state, dtype=float)
     assert np.abs(final[5:] + final[:4:-1]).max() > 1e-3  # (measured: 0.05 rad/s at t = 3 s)
+
+
+def test_a_collision_with_no_other_contact_touching_is_the_law_alone_bit_for_bit():
+    kw = dict(k="0.7", t_end="2")
+    phi, dphi = ["-0.5", "0.1", "2.5"], ["2", "0", "0"]
+    a = heyroll.simulate(scene([BALL] * 3, phi, dphi, simultaneous="sequential", **kw))
+    b = heyroll.simulate(scene([BALL] * 3, phi, dphi, **kw))
+    assert len(a.times) > 3 and 2 not in list(a.law_flags)
+    for x, y in ((a.times, b.times), (a.states_before, b.states_before), (a.states_after, b.states_after),
+                 (a.law_flags, b.law_flags), (a.final_state, b.final_state)):
+        assert np.array_equal(np.asarray(x, dtype=float), np.asarray(y, dtype=float))

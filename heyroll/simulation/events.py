@@ -1146,7 +1146,8 @@ def simultaneous_resolver(scene, system: SceneSystem, log: CollisionLog):
     this instant and share a unit with it (and, transitively, with those: a chain of touching units)
     are gathered; a contact within the settler's band (RESOLUTION_ULPS) of zero touches. None: no
     other contact touches, or the group could not be resolved at once (then the instant is resolved
-    sequentially, as without the key). Otherwise every contact of the group is resolved at once
+    sequentially, as without the key; so is a group where only one contact takes an impulse: its law
+    alone). Otherwise every contact of the group is resolved at once
     and True returned (False: the run stops at max_collisions).
 
     Each contact's law is a linear pair map (:class:`WorkingMap`; the unit map where a cluster takes
@@ -1243,8 +1244,8 @@ def simultaneous_resolver(scene, system: SceneSystem, log: CollisionLog):
                     change = change - q * beta_d
                 a_matrix[p][r] = -change
         impulses = complementarity(a_matrix, rhs, zero)
-        if impulses is None or not any(P > zero for P in impulses):
-            return None
+        if impulses is None or sum(P > zero for P in impulses) < 2:
+            return None  # (one contact pushed: its law alone, as without the key, with its own flag and policy)
         new = dict(v)
         for n, (q, alpha, beta, k), P in zip(members, laws, impulses):
             if P > zero:
