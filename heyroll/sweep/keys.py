@@ -18,8 +18,8 @@ from ..interfaces import scene_file as sf
 from .errors import SweepKeyError
 
 #: Scene-file fields that hold text or tables, never a number.
-NOT_NUMERIC = {"name", "type", "sides", "y", "kind", "side", "shape", "law", "on_inconsistent", "simultaneous", "segments", "sweep",
-               "track", "bodies", "collision", "run", "frame", "forcing"}
+NOT_NUMERIC = {"name", "type", "sides", "y", "kind", "side", "shape", "law", "on_inconsistent", "simultaneous",
+               "segments", "sweep", "track", "bodies", "collision", "run", "frame", "forcing"}
 #: A table scene's fields that hold text or lists (heyroll.interfaces.table_file).
 TABLE_TEXT = {"boundary", "cushion_model", "vertices", "simultaneous"}
 #: Numeric fields that take whole numbers only.

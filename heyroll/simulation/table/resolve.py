@@ -30,7 +30,7 @@ from ...model.table.laws.base import NormalImpulseLaw, RestitutionLaw
 from ...model.table.laws.ball_ball.newton import NewtonTableLaw
 from ..events import working_map
 from ..precision import Precision
-from ..resolve.complementarity import MAX_SIMULTANEOUS, GAUSS_SEIDEL_SWEEPS, complementarity as _complementarity  # noqa: F401
+from ..resolve.complementarity import complementarity
 from .contacts import Contact
 from .system import STATE_PER_BALL
 
@@ -202,7 +202,7 @@ class Resolver:
                 sigma = sigma + scale[b] * (jx * state[base + 2] + jy * state[base + 3])
             k = self.k_cushion if c.kind == "wall" else self.k_law
             rhs.append(sigma + k * sigma if sigma < self.zero else sigma)
-        impulses = _complementarity(a, rhs, self.zero)
+        impulses = complementarity(a, rhs, self.zero)
         if impulses is None:
             return None
         for c, push, lam in zip(contacts, pushes, impulses):
