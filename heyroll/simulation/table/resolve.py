@@ -51,13 +51,15 @@ class _RollingMassesNewton(NormalImpulseLaw, RestitutionLaw):
 
 
 def _normal_rates(law, body_i, body_j, precision: Precision):
-    """``rates(vn_i, vn_j)``: the outgoing normal velocities of the pair by ``law`` in the run's arithmetic. A law
-    with an impulse runs as the tracks' collisions do (events.working_map: a_i + q a_j = 1 + k kept on the rounded
-    constants, and in double the constants and the map in double-double, rounded once): from three constants
-    rounded apart, a_i + q a_j missed 1 + k by a rounding, the same every impact of the pair, and Hedrih's law at
-    k = 1 gained 0.24 ulp of energy per impact on average, 7e-13 over 1e5 impacts (review). Another law (mirror):
+    """``rates(vn_i, vn_j)``: the outgoing normal velocities of the pair by ``law`` in the run's arithmetic. In
+    double a law with an impulse runs as the tracks' collisions do (events.working_map: the constants and the map
+    in double-double, a_i + q a_j = 1 + k, rounded once): from three constants rounded apart, a_i + q a_j missed
+    1 + k by a rounding, the same every impact of the pair, and Hedrih's law at k = 1 gained 0.24 ulp of energy
+    per impact on average, 7e-13 over 1e5 impacts (review). In the other types its three constants are rounded
+    apart: working_map's a_i = 1 + k - q a_j there takes the rounding of q a_j, which for a_i << q a_j (a heavy
+    ball and a light one) broke eq. 8 by 9e-17 in long, 200 times its rounding (review). Another law (mirror):
     its own constants."""
-    if isinstance(law, NormalImpulseLaw):
+    if isinstance(law, NormalImpulseLaw) and precision.name == "double":
         return working_map(law.impulse_map(body_i, body_j), precision).apply
     constants = law.constants(body_i, body_j, precision.number)
     return lambda vn_i, vn_j: law.normal_rates(constants, vn_i, vn_j)
