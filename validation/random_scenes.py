@@ -3,7 +3,8 @@
     python validation/random_scenes.py [--seed 0] [--scenes 200]
 
 Draws scenes of 2-20 bodies of mixed shapes in a circle (a third of them
-mirror-symmetric starts at rest, where disjoint pairs collide at one instant),
+mirror-symmetric starts at rest, where disjoint pairs collide at one instant;
+every other one with ``[collision] simultaneous = "impulses"``),
 of 2-4 bodies on curves with limiters, with the rolling or Newton's law
 and restitutions from 0 to 1, and of 2-4 bodies on rough curves (Coulomb
 friction, a third of them on a moving base), and runs each to its t_end. Prints
@@ -36,7 +37,7 @@ CURVES = ("0.5*x**2", "0.3*x**4 - 0.4*x**2", "0.1*exp(2*x) + 0.1*exp(-2*x)")
 SUCCESS = ("completed", "max_collisions", "max_events")
 
 
-def circle_scene(rng: random.Random) -> Scene:
+def circle_scene(rng: random.Random, simultaneous: str = "sequential") -> Scene:
     n = rng.choice([2, 3, 4, 5, 6, 8, 12, 20])
     law = rng.choice(["hedrih", "newton"])
     symmetric = rng.random() < 0.3
@@ -54,7 +55,8 @@ def circle_scene(rng: random.Random) -> Scene:
     dphi = ["0" if symmetric else str(round(rng.uniform(-2, 2), 4)) for _ in range(n)]
     return Scene.make(CircleTrack.of_radius(1), bodies, phi=phi, dphi=dphi,
                       law=heyroll.make_law(law, rng.choice(["1", "0.99", "0.9", "0.5", "0"])),
-                      run=RunSettings.make(rng.choice([2, 5, 10])), name="symmetric" if symmetric else "random")
+                      run=RunSettings.make(rng.choice([2, 5, 10])), name="symmetric" if symmetric else "random",
+                      simultaneous=simultaneous)
 
 
 def curve_scene(rng: random.Random) -> Scene:
@@ -92,6 +94,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--scenes", type=int, default=200)
     parser.add_argument("--output", type=Path, default=Path(__file__).parent / "reports" / "random_scenes.md")
+    parser.add_argument("--simultaneous", choices=("sequential", "impulses", "both"), default="both",
+                        help="the circle scenes' [collision] simultaneous (both: impulses for every other scene, "
+                             "by its number: a seed draws the same scenes whichever is chosen)")
     args = parser.parse_args()
     rng = random.Random(args.seed)
     statuses: Counter = Counter()
@@ -99,11 +104,13 @@ def main() -> None:
     started = time.perf_counter()
     for number in range(args.scenes):
         draw = rng.random()
-        scene = circle_scene(rng) if draw < 0.6 else curve_scene(rng) if draw < 0.8 else rough_scene(rng)
+        policy = args.simultaneous if args.simultaneous != "both" else ("impulses", "sequential")[number % 2]
+        scene = circle_scene(rng, policy) if draw < 0.6 else curve_scene(rng) if draw < 0.8 else rough_scene(rng)
         result = heyroll.simulate(scene)
         statuses[result.status.value] += 1
         line = (f"{number}: {scene.name}, {scene.track.describe()}, {len(scene.bodies)} bodies, "
-                f"{scene.law.name} k = {float(scene.law.restitution):g}: {result.status.value}, "
+                f"{scene.law.name} k = {float(scene.law.restitution):g}"
+                + (", simultaneous impulses" if scene.simultaneous == "impulses" else "") + f": {result.status.value}, "
                 f"{result.n_collisions} collisions, {len(result.mode_changes)} modes")
         print(line, flush=True)
         if result.status.value not in SUCCESS:
@@ -112,7 +119,8 @@ def main() -> None:
     lines = [
         "# Random scenes through the engine",
         "",
-        f"`python validation/random_scenes.py --seed {args.seed} --scenes {args.scenes}`: "
+        f"`python validation/random_scenes.py --seed {args.seed} --scenes {args.scenes} "
+        f"--simultaneous {args.simultaneous}`: "
         f"{args.scenes} scenes in {time.perf_counter() - started:.0f} s; versions {versions()}.",
         "",
         "| status | runs |",
