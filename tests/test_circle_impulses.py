@@ -79,9 +79,14 @@ def test_sequential_is_the_default_and_unchanged():
 
 
 def test_the_limit_counts_the_group_rows():
+    """Review: a limit reached inside a group stopped after its first row, the state already holding the whole
+    group (body 3's new rate in no row). A group is one resolution: recorded whole, then the run stops."""
     result = heyroll.simulate(three_balls("0.5", max_collisions=1))
-    assert result.status is Status.MAX_COLLISIONS
-    assert result.total_collisions == 1 and len(result.times) == 1
+    assert result.status is Status.MAX_COLLISIONS and "recorded whole" in result.message
+    assert result.total_collisions == 2 and len(result.times) == 2
+    table = result.collision_table()
+    assert list(result.final_state[3:]) == pytest.approx(list(result.states_after[-1][3:]), abs=1e-12)
+    assert table["omega_j_after"][-1] == pytest.approx(-table["omega_i_after"][0], rel=1e-13)
 
 
 CIRCLE_TEXT = ('[track]\ntype = "circle"\nradius = 1.0\n'

@@ -1265,15 +1265,20 @@ def simultaneous_resolver(scene, system: SceneSystem, log: CollisionLog):
         for u in units:
             s[nu + u] = new[u]
         after = system.expand(s.tolist()) if clusters else s.tolist()
-        limit = log.max_collisions
         first = True
         for n, P in zip(members, impulses):
             if not P > zero:
                 continue
             records.append((t, contacts[n].pair_index, before if first else after, None, after, 2))
             first = False
-            if limit is not None and log.count >= limit:
-                return stop_at_max_collisions(log.stop, limit)
+        # One resolution, recorded whole: a limit reached inside it stops the run after its last row (stopping
+        # at the limit left a change in the state that no row held: review)
+        limit = log.max_collisions
+        if limit is not None and log.count >= limit:
+            stop_at_max_collisions(log.stop, limit)
+            if log.count > limit:
+                log.stop.message += f" (the last instant's {len(members)} contacts resolved at once, recorded whole)"
+            return False
         return True
 
     return group
