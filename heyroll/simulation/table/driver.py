@@ -187,18 +187,13 @@ class _Run:
         places written as doubles) but beyond the contact tolerance are moved to touching in the run's type: in
         long, quad or MPFR the tolerance is far below a double's rounding (measured: status overlap at t = 0). In
         double the tolerance covers the slack: nothing moves. A ball is put onto its cushion along the normal; then
-        the balls not on a cushion move, all at once, the least that closes every touching pair (moving a ball on
-        a cushion pushed a ball of a rack through the rail: review)."""
+        the balls move, all at once, the least that closes every touching pair, those on a cushion along it
+        (moving a ball on a cushion off it pushed a ball of a rack through the rail: review)."""
         touch = float(self.geometry.touch)
         num = self.num
 
         def slack(*balls) -> float:
             return touching_slack(*(float(self.state[STATE_PER_BALL * k + m]) for k in balls for m in (0, 1)))
-
-        def on_cushion(k) -> bool:
-            s = STATE_PER_BALL * k
-            return any(float(self.geometry.wall(k, w, self.state[s], self.state[s + 1])[0]) <= touch + slack(k)
-                       for (b, w) in self.system.walls if b == k)
 
         def shift(k, step, nx, ny) -> None:
             s = STATE_PER_BALL * k
@@ -224,26 +219,51 @@ class _Run:
         # All pairs at once (Newton's method on the touching pairs' distances, the least displacement that closes
         # them, in doubles: the steps are ~1e-17 m, their rounding far below the run's): pair by pair, putting a
         # ball of a rack onto one neighbour moved it into the next (quad: balls 5 and 9 of a break overlapped by
-        # 2.9e-17 m however often the pairs were passed over, status overlap at t = 0, review). A ball on a
-        # cushion stays there. A rack written as doubles is a lattice to within the slack: two steps close it.
+        # 2.9e-17 m however often the pairs were passed over, status overlap at t = 0, review). A free ball moves
+        # in the plane, a ball on one cushion along it (then put back onto it: a curved cushion), a ball in a
+        # corner not at all: held, the balls of a rack against a rail overlapped by 2e-19 m (review). A rack
+        # written as doubles is a lattice to within the slack: two steps close it.
         n = self.system.n_balls
-        free = [k for k in range(n) if not on_cushion(k)]
-        column = {k: 2 * c for c, k in enumerate(free)}
+
+        def walls(k) -> list:
+            s = STATE_PER_BALL * k
+            near = [self.geometry.wall(k, w, self.state[s], self.state[s + 1]) for (b, w) in self.system.walls
+                    if b == k]
+            return [(d, normal) for d, normal in near if float(d) <= touch + slack(k)]
+
+        directions: dict = {}  # ball -> the unit directions it may move along
+        for k in range(n):
+            on = walls(k)
+            if not on:
+                directions[k] = [(1.0, 0.0), (0.0, 1.0)]
+            elif len(on) == 1:
+                (_d, (nx, ny)), = on
+                directions[k] = [(-float(ny), float(nx))]
+        column, columns = {}, 0
+        for k, along in directions.items():
+            column[k] = columns
+            columns += len(along)
         pairs = [(i, j) for i in range(n) for j in range(i + 1, n) if (i in column or j in column)
                  and abs(float(self.geometry.pair(i, j, self.state)[0])) <= slack(i, j)]
         for _ in range(CLOSE_STEPS):
             rows = [(i, j, *self.geometry.pair(i, j, self.state)) for i, j in pairs]
             if not any(abs(float(d)) > touch for _i, _j, d, _n in rows):
                 break
-            jacobian = np.zeros((len(rows), 2 * len(free)))
+            jacobian = np.zeros((len(rows), columns))
             for r, (i, j, _d, (nx, ny)) in enumerate(rows):
                 for k, sign in ((i, -1.0), (j, 1.0)):
-                    if k in column:
-                        jacobian[r, column[k]:column[k] + 2] = sign * float(nx), sign * float(ny)
+                    for c, (ex, ey) in enumerate(directions.get(k, ())):
+                        jacobian[r, column[k] + c] = sign * (float(nx) * ex + float(ny) * ey)
             step = np.linalg.lstsq(jacobian, [-float(d) for _i, _j, d, _n in rows], rcond=None)[0]
-            for k, c in column.items():
+            for k, along in directions.items():
                 s = STATE_PER_BALL * k
-                self.state[s], self.state[s + 1] = self.state[s] + num(step[c]), self.state[s + 1] + num(step[c + 1])
+                dx = sum(step[column[k] + c] * ex for c, (ex, _ey) in enumerate(along))
+                dy = sum(step[column[k] + c] * ey for c, (_ex, ey) in enumerate(along))
+                self.state[s], self.state[s + 1] = self.state[s] + num(dx), self.state[s + 1] + num(dy)
+                on = walls(k)
+                if len(along) == 1 and len(on) == 1:  # back onto its cushion (a step along a curved one's tangent
+                    (d, (nx, ny)), = on              # leaves it)
+                    shift(k, d, nx, ny)
 
     def loop(self) -> None:
         if self.limit == 0:
