@@ -34,7 +34,7 @@ import numpy as np
 
 from ..model.laws import GeneralizedNewtonLaw, ImpulseMap, impulse_map
 from ..model._numbers import DEKKER_SPLIT, TOUCHING_SLACK, halves, workprec
-from .resolve.complementarity import complementarity
+from .resolve.complementarity import complementarity, relative_tolerance
 from .resolve.friction import slipping, slipping_law, slipping_members
 from .compiled_cache import by_constants
 from .system import SceneSystem, overlap_tolerance, unit_acceleration, unit_jerk
@@ -1175,7 +1175,8 @@ def simultaneous_resolver(scene, system: SceneSystem, log: CollisionLog):
     for n, (a, b, _) in enumerate(geometry):
         by_unit.setdefault(a, []).append(n)
         by_unit.setdefault(b, []).append(n)
-    masses = [number_type(system._unit_floats[u][2]) for u in range(nu)]
+    masses = [number_type(system.unit_mass(u)) for u in range(nu)]
+    relative = relative_tolerance(system.precision)
     maps: dict[int, tuple] = {}
     records = log.records
 
@@ -1243,7 +1244,7 @@ def simultaneous_resolver(scene, system: SceneSystem, log: CollisionLog):
                 if bd == b:
                     change = change - q * beta_d
                 a_matrix[p][r] = -change
-        impulses = complementarity(a_matrix, rhs, zero)
+        impulses = complementarity(a_matrix, rhs, zero, relative)
         if impulses is None or sum(P > zero for P in impulses) < 2:
             return None  # (one contact pushed: its law alone, as without the key, with its own flag and policy)
         new = dict(v)

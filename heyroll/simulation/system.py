@@ -277,6 +277,10 @@ class SceneSystem:
     def offsets_float(self, unit: int) -> list[float]:
         return self._unit_floats[unit][0]
 
+    def unit_mass(self, unit: int) -> float:
+        """The unit's total generalized mass (its members' sum)."""
+        return self._unit_floats[unit][2]
+
     @functools.cached_property
     def _unit_floats(self) -> tuple:
         """Per unit: its offsets, members' weight moments and total generalized mass, as floats

@@ -30,7 +30,7 @@ from ...model.table.laws.base import NormalImpulseLaw, RestitutionLaw
 from ...model.table.laws.ball_ball.newton import NewtonTableLaw
 from ..events import working_map
 from ..precision import Precision
-from ..resolve.complementarity import complementarity
+from ..resolve.complementarity import complementarity, relative_tolerance
 from .contacts import Contact
 from .system import STATE_PER_BALL
 
@@ -92,6 +92,7 @@ class Resolver:
                     self.pair_rates[(i, j)] = _normal_rates(scene.law, bi, bj, precision)
                 self.fallback[(i, j)] = _normal_rates(newton, bi, bj, precision)
                 self.rolling_fallback[(i, j)] = _normal_rates(generalized, bi, bj, precision)
+        self.solver_relative = relative_tolerance(precision)
         self.k_cushion = num(scene.cushion.restitution)
         self.k_law = num(scene.law.restitution)
         one_d = getattr(scene.law, "one_dimensional", None)
@@ -204,7 +205,7 @@ class Resolver:
                 sigma = sigma + scale[b] * (jx * state[base + 2] + jy * state[base + 3])
             k = self.k_cushion if c.kind == "wall" else self.k_law
             rhs.append(sigma + k * sigma if sigma < self.zero else sigma)
-        impulses = complementarity(a, rhs, self.zero)
+        impulses = complementarity(a, rhs, self.zero, self.solver_relative)
         if impulses is None:
             return None
         for c, push, lam in zip(contacts, pushes, impulses):
