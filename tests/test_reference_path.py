@@ -472,8 +472,15 @@ def test_reference_digits_converge():
 
 # ------------------------------------------------------------------ the engine
 
-@pytest.mark.parametrize("precision,tol", [("double", DOUBLE_TOL), ("quad", QUAD_TOL)])
-@pytest.mark.parametrize("name", sorted(SCENES))
+#: (scene, precision) pairs run with the slow studies: the fixed curve's quad compile took 59 s on an empty disk
+#: cache (measured); quad against mpmath stays in the suite on the turning curve and the others.
+SLOW_AGREEMENT = {("curve_fixed", "quad")}
+
+
+@pytest.mark.parametrize("name, precision, tol", [
+    pytest.param(name, precision, tol, id=f"{name}-{precision}-{tol:g}",
+                 marks=[pytest.mark.slow] if (name, precision) in SLOW_AGREEMENT else [])
+    for precision, tol in (("double", DOUBLE_TOL), ("quad", QUAD_TOL)) for name in sorted(SCENES)])
 def test_engine_agreement(name, precision, tol):
     text, n = SCENES[name]
     run = _reference(name, n)
