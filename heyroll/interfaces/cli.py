@@ -657,7 +657,8 @@ def _sweep(args, argv: list) -> int:
 
     from ..sweep.plan import make_plan
     from ..sweep.run import execute
-    from ..sweep.store import store_path, stored_mask
+    from ..sweep.store import check_spec, store_path, stored_mask
+    from .outputs import versions
 
     _sweep_extra()
     t_end = _positive_time(args.t_end) if args.t_end is not None else None
@@ -669,6 +670,8 @@ def _sweep(args, argv: list) -> int:
     plan = make_plan(args.scene, grid=args.grid, random=args.random, samples=args.samples, seed=args.seed,
                      keep=None if args.keep is None else ",".join(args.keep), t_end=t_end, max_collisions=max_collisions, precision=args.precision,
                      batch=args.batch)
+    if store_path(out).exists():  # a store of another sweep: its one line alone (the header came first: review)
+        check_spec(store_path(out), plan, versions())
     print(f"{plan.n_points} points: " + " x ".join(f"{d} ({n})" for d, n in zip(plan.dims, plan.shape))
           + (f" over {', '.join(k.text for k in plan.keys)}" if plan.sample is not None else ""))
     try:
