@@ -928,6 +928,17 @@ def _two_body_callback(c: dict):
     return on_collision
 
 
+def _contact_geometry(system: SceneSystem) -> tuple:
+    """(per watched contact (unit a, unit b, gap constant): the gap is psi_b - psi_a + constant; per unit the
+    contacts it takes part in, in contact order)."""
+    geometry = [(c.unit_a, c.unit_b, system.gap_constants[n]) for n, c in enumerate(system.contacts)]
+    by_unit: dict[int, list[int]] = {}
+    for n, (a, b, _) in enumerate(geometry):
+        by_unit.setdefault(a, []).append(n)
+        by_unit.setdefault(b, []).append(n)
+    return geometry, by_unit
+
+
 def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionLog, time_scale: float,
                     holder: list | None = None):
     """``settle(s, t, units, skip_open=None, skip_merge=()) -> bool``: pairs touching at one instant.
@@ -971,16 +982,12 @@ def contact_settler(scene, system: SceneSystem, resolvers: list, log: CollisionL
     eps = system.precision.epsilon
     k = float(scene.law.restitution)
     stop = log.stop
-    by_unit: dict[int, list[int]] = {}
+    geometry, by_unit = _contact_geometry(system)
     left_of: dict[int, int] = {}
     right_of: dict[int, int] = {}
-    geometry = []
     for number, c in enumerate(system.contacts):
-        by_unit.setdefault(c.unit_a, []).append(number)
-        by_unit.setdefault(c.unit_b, []).append(number)
         right_of[c.unit_a] = number
         left_of[c.unit_b] = number
-        geometry.append((c.unit_a, c.unit_b, system.gap_constants[number]))
     max_rounds = 64 * system.n_bodies
     gap_motion = GapMotion(system, holder)
 
@@ -1170,11 +1177,7 @@ def simultaneous_resolver(scene, system: SceneSystem, log: CollisionLog):
     double = system.precision.name == "double"
     clusters = any(u.is_cluster for u in system.units)
     contacts = system.contacts
-    geometry = [(c.unit_a, c.unit_b, system.gap_constants[n]) for n, c in enumerate(contacts)]
-    by_unit: dict[int, list[int]] = {}
-    for n, (a, b, _) in enumerate(geometry):
-        by_unit.setdefault(a, []).append(n)
-        by_unit.setdefault(b, []).append(n)
+    geometry, by_unit = _contact_geometry(system)
     masses = [number_type(system.unit_mass(u)) for u in range(nu)]
     relative = relative_tolerance(system.precision)
     maps: dict[int, tuple] = {}

@@ -260,9 +260,9 @@ class _Run:
                 dx = sum(step[column[k] + c] * ex for c, (ex, _ey) in enumerate(along))
                 dy = sum(step[column[k] + c] * ey for c, (_ex, ey) in enumerate(along))
                 self.state[s], self.state[s + 1] = self.state[s] + num(dx), self.state[s + 1] + num(dy)
-                on = walls(k)
-                if len(along) == 1 and len(on) == 1:  # back onto its cushion (a step along a curved one's tangent
-                    (d, (nx, ny)), = on              # leaves it)
+                on = walls(k) if len(along) == 1 else ()
+                if len(on) == 1:  # back onto its cushion (a step along a curved one's tangent leaves it)
+                    (d, (nx, ny)), = on
                     shift(k, d, nx, ny)
 
     def loop(self) -> None:
